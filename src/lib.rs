@@ -1,1 +1,15 @@
+#![doc = include_str!("../README.md")]
+#![warn(missing_docs)]
 
+pub mod design;
+pub mod error;
+pub mod io;
+pub mod kinematics;
+pub mod scenario;
+pub mod world;
+
+pub use design::{Design, DesignSpace};
+pub use error::{Error, Result};
+pub use kinematics::{Axis, Chain, Frames, Range};
+pub use scenario::Scenario;
+pub use world::{Obstacle, Workspace};

@@ -1,0 +1,102 @@
+//! The crate's error type: every failure names what was wrong, where, and with which value.
+
+use std::path::PathBuf;
+
+/// Result alias used throughout the crate.
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// Everything that can go wrong while reading, validating or using a scenario or a design.
+///
+/// Variants carry named fields so callers can react to them; their `Display` is a one-line
+/// message fit for a command line: file, field path, value and what is wrong with it.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// A file could not be read.
+    #[error("{}: cannot read: {source}", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// The underlying I/O error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A file could not be written (or its temporary file renamed into place).
+    #[error("{}: cannot write: {source}", path.display())]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// The underlying I/O error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A file is not well-formed: syntax, an unknown key, a missing key or a value of the wrong
+    /// type. The message names the field path and, where known, the line.
+    #[error("{}: {message}", file.display())]
+    Parse {
+        /// The file.
+        file: PathBuf,
+        /// What the parser reported, with the field path.
+        message: String,
+    },
+    /// A value is out of its domain (a negative radius, `min > max`, a NaN, …).
+    #[error("{field} = {value}: {reason}")]
+    InvalidValue {
+        /// Field path, e.g. `obstacle[3].radius`.
+        field: String,
+        /// The offending value as written.
+        value: String,
+        /// What the value must be.
+        reason: String,
+    },
+    /// A task point lies inside an obstacle (paper Eq. 4 requires every task point outside).
+    #[error("task[{task}] = {point} lies inside obstacle[{obstacle}] ({name})")]
+    TaskInsideObstacle {
+        /// Index of the task point.
+        task: usize,
+        /// The task point, formatted.
+        point: String,
+        /// Index of the obstacle.
+        obstacle: usize,
+        /// Name (or shape) of the obstacle.
+        name: String,
+    },
+    /// An error found while processing a particular file.
+    #[error("{}: {source}", file.display())]
+    InFile {
+        /// The file being processed.
+        file: PathBuf,
+        /// What went wrong in it.
+        #[source]
+        source: Box<Error>,
+    },
+}
+
+impl Error {
+    /// An [`Error::InvalidValue`] from displayable parts.
+    pub fn invalid(
+        field: impl Into<String>,
+        value: impl std::fmt::Display,
+        reason: impl Into<String>,
+    ) -> Self {
+        Error::InvalidValue {
+            field: field.into(),
+            value: value.to_string(),
+            reason: reason.into(),
+        }
+    }
+
+    /// Attaches the file being processed, unless the error already names a file.
+    pub fn in_file(self, file: impl Into<PathBuf>) -> Self {
+        match self {
+            e @ (Error::Read { .. }
+            | Error::Write { .. }
+            | Error::Parse { .. }
+            | Error::InFile { .. }) => e,
+            other => Error::InFile {
+                file: file.into(),
+                source: Box::new(other),
+            },
+        }
+    }
+}

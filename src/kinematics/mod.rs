@@ -1,0 +1,12 @@
+//! The generic parametric serial chain (paper §II-A): links with fixed geometry and six-axis
+//! actuation, and allocation-free forward kinematics.
+
+pub mod axis;
+pub mod chain;
+pub mod link;
+pub mod placement;
+
+pub use axis::{Axis, Range};
+pub use chain::{Chain, Frames, FreeAxis};
+pub use link::{Dh, Link, LinkGeometry};
+pub use placement::Placement;

@@ -1,0 +1,8 @@
+//! The world the robot works in: obstacles, task points and clearance (paper §II-B).
+
+pub mod convert;
+pub mod obstacle;
+pub mod workspace;
+
+pub use obstacle::{Obstacle, ObstacleShape};
+pub use workspace::{Contact, Workspace};

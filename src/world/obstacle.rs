@@ -1,0 +1,258 @@
+//! Obstacles: parry shapes with a pose (paper Eq. 3, generalised from spheres).
+
+use super::convert::{to_parry_point, to_parry_pose};
+use crate::error::{Error, Result};
+use nalgebra::{IsometryMatrix3, Point3, Rotation3, Vector3};
+use parry3d_f64::math::Pose;
+use parry3d_f64::query;
+use parry3d_f64::shape::{Segment, SharedShape};
+
+/// What an obstacle is, as written in a scenario. Lengths in metres.
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum ObstacleShape {
+    /// A ball (the paper's obstacle, Eq. 3).
+    Sphere {
+        /// Radius.
+        radius: f64,
+    },
+    /// A capsule along its local z axis: a segment of `length` swept by a ball of `radius`.
+    Capsule {
+        /// Length of the inner segment (0 gives a sphere).
+        length: f64,
+        /// Radius.
+        radius: f64,
+    },
+    /// A box with full side lengths `size` along its local x, y, z.
+    Cuboid {
+        /// Full side lengths.
+        size: [f64; 3],
+    },
+    /// A solid cylinder along its local z axis (as in URDF).
+    Cylinder {
+        /// Full length along z.
+        length: f64,
+        /// Radius.
+        radius: f64,
+    },
+}
+
+impl ObstacleShape {
+    /// Lowercase kind name (`sphere`, `capsule`, …).
+    pub fn kind(&self) -> &'static str {
+        match self {
+            ObstacleShape::Sphere { .. } => "sphere",
+            ObstacleShape::Capsule { .. } => "capsule",
+            ObstacleShape::Cuboid { .. } => "cuboid",
+            ObstacleShape::Cylinder { .. } => "cylinder",
+        }
+    }
+
+    /// Checks every dimension: finite and positive (a capsule's length may be 0). The error
+    /// names the field (`radius`, `size`, `length`) relative to the obstacle.
+    pub fn validate(&self) -> Result<()> {
+        let positive = |field: &str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(Error::invalid(field, v, "must be positive and finite"))
+            }
+        };
+        match *self {
+            ObstacleShape::Sphere { radius } => positive("radius", radius),
+            ObstacleShape::Capsule { length, radius } => {
+                positive("radius", radius)?;
+                if length.is_finite() && length >= 0.0 {
+                    Ok(())
+                } else {
+                    Err(Error::invalid(
+                        "length",
+                        length,
+                        "must be finite and not negative",
+                    ))
+                }
+            }
+            ObstacleShape::Cuboid { size } => {
+                if size.iter().all(|v| v.is_finite() && *v > 0.0) {
+                    Ok(())
+                } else {
+                    Err(Error::invalid(
+                        "size",
+                        format!("{size:?}"),
+                        "every side must be positive and finite",
+                    ))
+                }
+            }
+            ObstacleShape::Cylinder { length, radius } => {
+                positive("radius", radius)?;
+                positive("length", length)
+            }
+        }
+    }
+
+    /// The parry shape and the transform from the obstacle's frame to the shape's own frame
+    /// (parry's cylinders stand along y, ours along z).
+    fn parry(&self) -> (SharedShape, IsometryMatrix3<f64>) {
+        let id = IsometryMatrix3::identity();
+        match *self {
+            ObstacleShape::Sphere { radius } => (SharedShape::ball(radius), id),
+            ObstacleShape::Capsule { length, radius } => {
+                (SharedShape::capsule_z(0.5 * length, radius), id)
+            }
+            ObstacleShape::Cuboid { size } => (
+                SharedShape::cuboid(0.5 * size[0], 0.5 * size[1], 0.5 * size[2]),
+                id,
+            ),
+            ObstacleShape::Cylinder { length, radius } => (
+                SharedShape::cylinder(0.5 * length, radius),
+                IsometryMatrix3::from_parts(
+                    Default::default(),
+                    Rotation3::from_axis_angle(&Vector3::x_axis(), std::f64::consts::FRAC_PI_2),
+                ),
+            ),
+        }
+    }
+}
+
+/// An obstacle of the workspace: a named shape placed in the world.
+#[derive(Clone, Debug)]
+pub struct Obstacle {
+    /// Name used in messages and reports.
+    pub name: String,
+    /// What the obstacle is.
+    pub geometry: ObstacleShape,
+    /// Its placement in the world.
+    pub placement: IsometryMatrix3<f64>,
+    shape: SharedShape,
+    pose: Pose,
+    sphere: Option<(Point3<f64>, f64)>,
+}
+
+impl Obstacle {
+    /// An obstacle from its shape and placement; dimensions are validated.
+    pub fn new(
+        name: impl Into<String>,
+        geometry: ObstacleShape,
+        placement: IsometryMatrix3<f64>,
+    ) -> Result<Self> {
+        geometry.validate()?;
+        let (shape, local) = geometry.parry();
+        let sphere = match geometry {
+            ObstacleShape::Sphere { radius } => {
+                Some((Point3::from(placement.translation.vector), radius))
+            }
+            _ => None,
+        };
+        Ok(Obstacle {
+            name: name.into(),
+            geometry,
+            pose: to_parry_pose(&(placement * local)),
+            placement,
+            shape,
+            sphere,
+        })
+    }
+
+    /// A sphere obstacle at `center` (paper Eq. 3).
+    pub fn sphere(name: impl Into<String>, center: Point3<f64>, radius: f64) -> Result<Self> {
+        Obstacle::new(
+            name,
+            ObstacleShape::Sphere { radius },
+            IsometryMatrix3::translation(center.x, center.y, center.z),
+        )
+    }
+
+    /// The parry shape.
+    pub fn shape(&self) -> &SharedShape {
+        &self.shape
+    }
+
+    /// The parry pose of the shape.
+    pub fn pose(&self) -> &Pose {
+        &self.pose
+    }
+
+    /// Centre and radius when the obstacle is a sphere, for closed-form fast paths.
+    pub fn as_sphere(&self) -> Option<(Point3<f64>, f64)> {
+        self.sphere
+    }
+
+    /// True when `p` lies inside the obstacle or on its boundary.
+    pub fn contains_point(&self, p: &Point3<f64>) -> bool {
+        self.shape.contains_point(&self.pose, to_parry_point(p))
+    }
+
+    /// Distance from `p` to the obstacle: positive outside, negative inside (the depth).
+    pub fn signed_distance_to_point(&self, p: &Point3<f64>) -> f64 {
+        let proj = self
+            .shape
+            .project_point(&self.pose, to_parry_point(p), false);
+        let d = (proj.point - to_parry_point(p)).length();
+        if proj.is_inside {
+            -d
+        } else {
+            d
+        }
+    }
+
+    /// Distance from the capsule of `radius` around segment `a`–`b` to the obstacle; 0 when they
+    /// touch or overlap.
+    pub fn distance_to_capsule(&self, a: &Point3<f64>, b: &Point3<f64>, radius: f64) -> f64 {
+        let seg = Segment::new(to_parry_point(a), to_parry_point(b));
+        let d = query::distance(&Pose::IDENTITY, &seg, &self.pose, self.shape.as_ref())
+            .map(|d| d.distance)
+            .unwrap_or(0.0);
+        (d - radius).max(0.0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn sphere_queries_match_closed_form() {
+        let o = Obstacle::sphere("s", Point3::new(1.0, 0.0, 0.0), 0.5).unwrap();
+        assert!(o.contains_point(&Point3::new(1.2, 0.1, 0.0)));
+        assert!(!o.contains_point(&Point3::new(1.6, 0.0, 0.0)));
+        assert_relative_eq!(
+            o.signed_distance_to_point(&Point3::new(3.0, 0.0, 0.0)),
+            1.5,
+            epsilon = 1e-12
+        );
+        let d = o.distance_to_capsule(&Point3::new(0.0, 1.0, 0.0), &Point3::new(2.0, 1.0, 0.0), 0.1);
+        assert_relative_eq!(d, 0.4, epsilon = 1e-9);
+    }
+
+    #[test]
+    fn cylinder_stands_along_local_z() {
+        let o = Obstacle::new(
+            "c",
+            ObstacleShape::Cylinder {
+                length: 2.0,
+                radius: 0.1,
+            },
+            IsometryMatrix3::identity(),
+        )
+        .unwrap();
+        assert!(o.contains_point(&Point3::new(0.0, 0.0, 0.9)));
+        assert!(!o.contains_point(&Point3::new(0.0, 0.9, 0.0)));
+    }
+
+    #[test]
+    fn bad_dimensions_name_the_field() {
+        let e = ObstacleShape::Sphere { radius: -1.0 }
+            .validate()
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("radius = -1"), "{e}");
+        let e = ObstacleShape::Cuboid {
+            size: [1.0, f64::NAN, 1.0],
+        }
+        .validate()
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("size") && e.contains("NaN"), "{e}");
+    }
+}
