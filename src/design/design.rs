@@ -171,7 +171,11 @@ impl Design {
     /// Field paths look like `links[2].axes.ry`.
     pub fn validate(&self) -> Result<()> {
         if self.links.is_empty() {
-            return Err(Error::invalid("links", "[]", "a design needs at least one link"));
+            return Err(Error::invalid(
+                "links",
+                "[]",
+                "a design needs at least one link",
+            ));
         }
         if !(self.link_radius.is_finite() && self.link_radius >= 0.0) {
             return Err(Error::invalid(

@@ -96,7 +96,11 @@ impl DesignSpace {
     /// finite with `lower ≤ upper`, links must exist, and a parameter may be free only once.
     pub fn new(template: Design, variables: Vec<Variable>, snap: f64) -> Result<Self> {
         if !(snap.is_finite() && snap >= 0.0) {
-            return Err(Error::invalid("snap", snap, "must be finite and not negative"));
+            return Err(Error::invalid(
+                "snap",
+                snap,
+                "must be finite and not negative",
+            ));
         }
         for (k, v) in variables.iter().enumerate() {
             let field = v.name();
@@ -121,7 +125,11 @@ impl DesignSpace {
                 .iter()
                 .any(|w| w.link == v.link && w.param == v.param)
             {
-                return Err(Error::invalid(field, "twice", "a variable may be free once"));
+                return Err(Error::invalid(
+                    field,
+                    "twice",
+                    "a variable may be free once",
+                ));
             }
         }
         Ok(DesignSpace {

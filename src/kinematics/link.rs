@@ -132,11 +132,7 @@ mod tests {
         let g = LinkGeometry::from_dh(&dh);
         assert_eq!(g.body.len(), 3);
         let end = g.body.last().unwrap();
-        assert_relative_eq!(
-            end.coords,
-            g.transform.translation.vector,
-            epsilon = 1e-15
-        );
+        assert_relative_eq!(end.coords, g.transform.translation.vector, epsilon = 1e-15);
         assert_relative_eq!(g.body_length(), 0.8, epsilon = 1e-15);
     }
 

@@ -221,7 +221,11 @@ mod tests {
             1.5,
             epsilon = 1e-12
         );
-        let d = o.distance_to_capsule(&Point3::new(0.0, 1.0, 0.0), &Point3::new(2.0, 1.0, 0.0), 0.1);
+        let d = o.distance_to_capsule(
+            &Point3::new(0.0, 1.0, 0.0),
+            &Point3::new(2.0, 1.0, 0.0),
+            0.1,
+        );
         assert_relative_eq!(d, 0.4, epsilon = 1e-9);
     }
 

@@ -55,7 +55,11 @@ impl Workspace {
             ));
         }
         if self.tasks.is_empty() {
-            return Err(Error::invalid("task", "[]", "at least one task point is needed"));
+            return Err(Error::invalid(
+                "task",
+                "[]",
+                "at least one task point is needed",
+            ));
         }
         for (j, p) in self.tasks.iter().enumerate() {
             if !p.iter().all(|v| v.is_finite()) {

@@ -1,0 +1,175 @@
+//! Settings sections of a scenario: planner, objective weights, optimiser. Every field has a
+//! documented default so a scenario may leave a section out.
+
+use serde::{Deserialize, Serialize};
+
+/// Edge-checking strategy, chosen by name in `planner.checker` and `--checker`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CheckerKind {
+    /// End configuration only (the paper's §IV baseline; safe only with a small `L_max`).
+    Discrete,
+    /// The paper's §III-A fast path: point colliders and the segments they sweep.
+    #[default]
+    Segment,
+    /// Continuous collision detection of the link capsules with parry shape casts.
+    Ccd,
+    /// Conservative advancement with chain motion bounds: free only when proven free.
+    Certified,
+}
+
+impl CheckerKind {
+    /// All strategies.
+    pub const ALL: [CheckerKind; 4] = [
+        CheckerKind::Discrete,
+        CheckerKind::Segment,
+        CheckerKind::Ccd,
+        CheckerKind::Certified,
+    ];
+
+    /// The name used in files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            CheckerKind::Discrete => "discrete",
+            CheckerKind::Segment => "segment",
+            CheckerKind::Ccd => "ccd",
+            CheckerKind::Certified => "certified",
+        }
+    }
+}
+
+impl std::str::FromStr for CheckerKind {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        CheckerKind::ALL
+            .into_iter()
+            .find(|k| k.name() == s)
+            .ok_or_else(|| {
+                format!("unknown checker `{s}` (expected discrete, segment, ccd or certified)")
+            })
+    }
+}
+
+/// The `[planner]` section: the RRT that decides reachability (paper §II-D, Eq. 10).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PlannerConfig {
+    /// Edge checker. Default `segment`.
+    pub checker: CheckerKind,
+    /// Step bound `L_max` of paper Eq. 10 on `‖Δf‖ + λ‖Δa‖`. Default π/4 (paper §IV).
+    pub l_max: f64,
+    /// Weight `λ` of the actuation-space step in the metric of Eq. 10. Default 0.1.
+    pub lambda: f64,
+    /// Distance (metres) at which the end effector counts as on a task point. Default 0.02.
+    pub goal_tolerance: f64,
+    /// RRT iterations per design. Default 2000.
+    pub max_iterations: usize,
+    /// Probability of growing toward a task point instead of a random sample. Default 0.2.
+    pub goal_bias: f64,
+    /// Optional wall-clock cap (seconds) per reachability evaluation. Default: none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub time_limit: Option<f64>,
+}
+
+impl Default for PlannerConfig {
+    fn default() -> Self {
+        PlannerConfig {
+            checker: CheckerKind::Segment,
+            l_max: std::f64::consts::FRAC_PI_4,
+            lambda: 0.1,
+            goal_tolerance: 0.02,
+            max_iterations: 2000,
+            goal_bias: 0.2,
+            time_limit: None,
+        }
+    }
+}
+
+/// The `[objective]` section: weights `λ0 … λ5` of paper Eq. 23.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ObjectiveWeights {
+    /// `λ0`, on the unreached share `1 − R`. Default 10.
+    pub lambda0: f64,
+    /// `λ1`, on `A_i = atan(a_i)` (link length). Default 1.
+    pub lambda1: f64,
+    /// `λ2`, on `B_i = Σ atan(max − min)` (joint ranges). Default 0.2.
+    pub lambda2: f64,
+    /// `λ3`, on `C_i` (link kept). Default 0.5.
+    pub lambda3: f64,
+    /// `λ4`, on `D_i` (joint kept). Default 0.5.
+    pub lambda4: f64,
+    /// `λ5`, on `E` (some task unreached). Default 20.
+    pub lambda5: f64,
+}
+
+impl Default for ObjectiveWeights {
+    fn default() -> Self {
+        ObjectiveWeights {
+            lambda0: 10.0,
+            lambda1: 1.0,
+            lambda2: 0.2,
+            lambda3: 0.5,
+            lambda4: 0.5,
+            lambda5: 20.0,
+        }
+    }
+}
+
+impl ObjectiveWeights {
+    /// The weights as an array `[λ0, …, λ5]`.
+    pub fn as_array(&self) -> [f64; 6] {
+        [
+            self.lambda0,
+            self.lambda1,
+            self.lambda2,
+            self.lambda3,
+            self.lambda4,
+            self.lambda5,
+        ]
+    }
+}
+
+/// Optimisation algorithm, chosen by name in `optimizer.algorithm` and `--optimizer`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Algorithm {
+    /// Real-coded genetic algorithm.
+    #[default]
+    Ga,
+    /// Particle swarm optimisation.
+    Pso,
+    /// Adaptive simulated annealing.
+    Asa,
+}
+
+/// The `[optimizer]` section.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct OptimizerConfig {
+    /// Algorithm. Default `ga`.
+    pub algorithm: Algorithm,
+    /// Population (GA) or swarm (PSO) size. Default 32.
+    pub population: usize,
+    /// Stop once `R = 1` and the best cost has not improved for this many generations.
+    /// Default 30.
+    pub patience: usize,
+    /// Wall-clock budget in seconds. Default 60.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub time_limit: Option<f64>,
+    /// Budget in objective evaluations. Default: none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub evaluations: Option<u64>,
+}
+
+impl Default for OptimizerConfig {
+    fn default() -> Self {
+        OptimizerConfig {
+            algorithm: Algorithm::Ga,
+            population: 32,
+            patience: 30,
+            time_limit: Some(60.0),
+            evaluations: None,
+        }
+    }
+}

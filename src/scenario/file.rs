@@ -1,0 +1,246 @@
+//! The scenario file as written (TOML), before validation. See the README for the format.
+
+use super::config::{ObjectiveWeights, OptimizerConfig, PlannerConfig};
+use crate::kinematics::Placement;
+use serde::de::{self, SeqAccess, Visitor};
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+/// A design parameter in a scenario: a number fixes it, `[lower, upper]` makes it a free design
+/// variable with those bounds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ParamSpec {
+    /// A fixed value.
+    Fixed(f64),
+    /// A free variable with bounds `[lower, upper]`.
+    Free(f64, f64),
+}
+
+impl Default for ParamSpec {
+    fn default() -> Self {
+        ParamSpec::Fixed(0.0)
+    }
+}
+
+impl Serialize for ParamSpec {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match *self {
+            ParamSpec::Fixed(v) => s.serialize_f64(v),
+            ParamSpec::Free(lo, hi) => [lo, hi].serialize(s),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for ParamSpec {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = ParamSpec;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a number (fixed) or [lower, upper] (a free design variable)")
+            }
+            fn visit_f64<E: de::Error>(self, v: f64) -> Result<ParamSpec, E> {
+                Ok(ParamSpec::Fixed(v))
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<ParamSpec, E> {
+                Ok(ParamSpec::Fixed(v as f64))
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<ParamSpec, E> {
+                Ok(ParamSpec::Fixed(v as f64))
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<ParamSpec, A::Error> {
+                let lo: f64 = seq
+                    .next_element()?
+                    .ok_or_else(|| de::Error::invalid_length(0, &self))?;
+                let hi: f64 = seq
+                    .next_element()?
+                    .ok_or_else(|| de::Error::invalid_length(1, &self))?;
+                if seq.next_element::<f64>()?.is_some() {
+                    return Err(de::Error::invalid_length(3, &self));
+                }
+                Ok(ParamSpec::Free(lo, hi))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// One actuation axis in a link template: its lower and upper limit, each fixed or free.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AxisSpec {
+    /// The lower limit (paper Eq. 20).
+    pub min: ParamSpec,
+    /// The upper limit (paper Eq. 21).
+    pub max: ParamSpec,
+}
+
+/// The actuated axes of a link template; an axis left out is not a joint.
+#[derive(Clone, Copy, Debug, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct AxesSpec {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rx: Option<AxisSpec>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ry: Option<AxisSpec>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rz: Option<AxisSpec>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tx: Option<AxisSpec>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ty: Option<AxisSpec>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tz: Option<AxisSpec>,
+}
+
+impl AxesSpec {
+    /// The six entries in the order of paper Eq. 2.
+    pub fn entries(&self) -> [Option<AxisSpec>; 6] {
+        [self.rx, self.ry, self.rz, self.tx, self.ty, self.tz]
+    }
+}
+
+/// A link template: the uniform one (`[robot.uniform]`) or a per-link override
+/// (`[[robot.link]]` with `index`). Anything left out falls back to the uniform template, and
+/// from there to 0 (fixed) and no joints.
+#[derive(Clone, Debug, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LinkSpec {
+    /// Link index (from 1) in an override; absent in the uniform template.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub index: Option<usize>,
+    /// DH θ.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub theta: Option<ParamSpec>,
+    /// DH d.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub d: Option<ParamSpec>,
+    /// DH a, the link length.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub a: Option<ParamSpec>,
+    /// DH α.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub alpha: Option<ParamSpec>,
+    /// Actuated axes. In an override, each listed axis replaces the uniform one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub axes: Option<AxesSpec>,
+}
+
+fn default_link_radius() -> f64 {
+    0.02
+}
+fn default_colliders() -> usize {
+    4
+}
+fn default_snap() -> f64 {
+    1e-3
+}
+
+/// The `[robot]` section: the robot template.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RobotSpec {
+    /// Number of links `n` of the generic chain (paper Eq. 1).
+    pub links: usize,
+    /// Capsule radius of every link (metres). Default 0.02.
+    #[serde(default = "default_link_radius")]
+    pub link_radius: f64,
+    /// Point colliders per link `s_i` (paper Eq. 6). Default 4.
+    #[serde(default = "default_colliders")]
+    pub colliders_per_link: usize,
+    /// Values closer to zero than this become zero when decoding a design, removing links and
+    /// joints. Default 0.001.
+    #[serde(default = "default_snap")]
+    pub snap: f64,
+    /// Base placement. Default: the origin.
+    #[serde(default)]
+    pub base: Placement,
+    /// Template for every link.
+    #[serde(default)]
+    pub uniform: LinkSpec,
+    /// Per-link overrides.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub link: Vec<LinkSpec>,
+}
+
+/// Obstacle shape kinds accepted in `[[obstacle]] shape = …`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ShapeKind {
+    /// Needs `radius`.
+    Sphere,
+    /// Needs `radius` and `length` (along local z).
+    Capsule,
+    /// Needs `size` (full side lengths).
+    Cuboid,
+    /// Needs `radius` and `length` (along local z).
+    Cylinder,
+}
+
+/// One `[[obstacle]]` entry.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObstacleSpec {
+    /// Optional name for messages.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// The shape kind.
+    pub shape: ShapeKind,
+    /// Position of the shape's centre.
+    pub position: [f64; 3],
+    /// Orientation (roll, pitch, yaw). Default 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rpy: Option<[f64; 3]>,
+    /// Radius (sphere, capsule, cylinder).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius: Option<f64>,
+    /// Length along local z (capsule: between the cap centres; cylinder: full height).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub length: Option<f64>,
+    /// Full side lengths (cuboid).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub size: Option<[f64; 3]>,
+}
+
+/// One `[[task]]` entry.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TaskSpec {
+    /// Optional name.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// The point the end effector must reach.
+    pub point: [f64; 3],
+}
+
+/// The whole scenario file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScenarioSpec {
+    /// Optional name.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// Seed of every random stream. Default 0.
+    #[serde(default)]
+    pub seed: u64,
+    /// Clearance `ε` (metres) the body keeps from obstacles (paper Eq. 15). Default 0.
+    #[serde(default)]
+    pub clearance: f64,
+    /// The robot template.
+    pub robot: RobotSpec,
+    /// Planner settings.
+    #[serde(default)]
+    pub planner: PlannerConfig,
+    /// Objective weights.
+    #[serde(default)]
+    pub objective: ObjectiveWeights,
+    /// Optimiser settings.
+    #[serde(default)]
+    pub optimizer: OptimizerConfig,
+    /// Obstacles.
+    #[serde(default)]
+    pub obstacle: Vec<ObstacleSpec>,
+    /// Task points.
+    #[serde(default)]
+    pub task: Vec<TaskSpec>,
+}

@@ -1,0 +1,510 @@
+//! Scenario files (TOML): the robot template, the workspace and the settings of a design study,
+//! read into a validated [`Scenario`]; and presets that generate the paper's random workspaces.
+
+pub mod config;
+pub mod file;
+pub mod preset;
+
+pub use config::{Algorithm, CheckerKind, ObjectiveWeights, OptimizerConfig, PlannerConfig};
+pub use file::{AxesSpec, AxisSpec, LinkSpec, ObstacleSpec, ParamSpec, ScenarioSpec, ShapeKind};
+
+use crate::design::{AxisRanges, Design, DesignSpace, LinkDesign, Param, Variable};
+use crate::error::{Error, Result};
+use crate::kinematics::{Axis, Placement, Range};
+use crate::world::{Contact, Obstacle, ObstacleShape, Workspace};
+use nalgebra::Point3;
+use std::path::{Path, PathBuf};
+
+/// A validated scenario: design space, workspace and settings.
+#[derive(Clone, Debug)]
+pub struct Scenario {
+    /// Name (from the file, or the file stem).
+    pub name: String,
+    /// The file it was read from, if any.
+    pub path: Option<PathBuf>,
+    /// Seed of every random stream.
+    pub seed: u64,
+    /// Which design variables are free, and their bounds.
+    pub space: DesignSpace,
+    /// Obstacles, tasks, clearance.
+    pub workspace: Workspace,
+    /// Planner settings.
+    pub planner: PlannerConfig,
+    /// Objective weights.
+    pub objective: ObjectiveWeights,
+    /// Optimiser settings.
+    pub optimizer: OptimizerConfig,
+}
+
+/// Prefixes the field path of an [`Error::InvalidValue`] (e.g. `radius` → `obstacle[3].radius`).
+fn at(prefix: &str) -> impl Fn(Error) -> Error + '_ {
+    move |e| match e {
+        Error::InvalidValue {
+            field,
+            value,
+            reason,
+        } => Error::InvalidValue {
+            field: format!("{prefix}.{field}"),
+            value,
+            reason,
+        },
+        other => other,
+    }
+}
+
+fn check(
+    ok: bool,
+    field: impl Into<String>,
+    value: impl std::fmt::Display,
+    why: &str,
+) -> Result<()> {
+    if ok {
+        Ok(())
+    } else {
+        Err(Error::invalid(field, value, why))
+    }
+}
+
+fn check_param(p: &ParamSpec, field: &str) -> Result<()> {
+    match *p {
+        ParamSpec::Fixed(v) => check(v.is_finite(), field, v, "must be finite"),
+        ParamSpec::Free(lo, hi) => {
+            let value = format!("[{lo}, {hi}]");
+            check(
+                lo.is_finite() && hi.is_finite(),
+                field,
+                &value,
+                "bounds must be finite",
+            )?;
+            check(lo <= hi, field, &value, "lower bound exceeds upper bound")
+        }
+    }
+}
+
+fn fmt3(v: [f64; 3]) -> String {
+    format!("[{}, {}, {}]", v[0], v[1], v[2])
+}
+
+impl Scenario {
+    /// Reads and validates a scenario file. Every error names the file, and the field path and
+    /// value where there is one.
+    pub fn load(path: &Path) -> Result<Scenario> {
+        let text = std::fs::read_to_string(path).map_err(|source| Error::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let spec = Self::parse(&text).map_err(|e| e.in_file(path))?;
+        let mut s = Scenario::from_spec(&spec).map_err(|e| e.in_file(path))?;
+        if spec.name.is_none() {
+            if let Some(stem) = path.file_stem() {
+                s.name = stem.to_string_lossy().into_owned();
+            }
+        }
+        s.path = Some(path.to_path_buf());
+        Ok(s)
+    }
+
+    /// Parses scenario TOML into its raw form. Syntax errors, unknown keys and wrong types are
+    /// reported with their field path (`obstacle[3].radius`) and line.
+    pub fn parse(text: &str) -> Result<ScenarioSpec> {
+        let parse_error = |message: String| Error::Parse {
+            file: PathBuf::new(),
+            message,
+        };
+        let de = toml::de::Deserializer::parse(text)
+            .map_err(|e| parse_error(e.to_string().trim().to_string()))?;
+        serde_path_to_error::deserialize(de).map_err(|e| {
+            let path = e.path().to_string();
+            let inner = e.into_inner();
+            let line = inner.span().map(|s| text[..s.start].lines().count().max(1));
+            let message = inner.message().to_string();
+            let mut m = String::new();
+            if let Some(l) = line {
+                m.push_str(&format!("line {l}: "));
+            }
+            if path != "." {
+                m.push_str(&format!("{path}: "));
+            }
+            m.push_str(&message);
+            parse_error(m)
+        })
+    }
+
+    /// Validates a raw scenario and builds the design space and workspace.
+    pub fn from_spec(spec: &ScenarioSpec) -> Result<Scenario> {
+        let space = Self::design_space(spec)?;
+        let workspace = Self::workspace(spec)?;
+        let p = &spec.planner;
+        check(
+            p.l_max.is_finite() && p.l_max > 0.0,
+            "planner.l_max",
+            p.l_max,
+            "must be positive and finite",
+        )?;
+        check(
+            p.lambda.is_finite() && p.lambda >= 0.0,
+            "planner.lambda",
+            p.lambda,
+            "must be finite and not negative",
+        )?;
+        check(
+            p.goal_tolerance.is_finite() && p.goal_tolerance > 0.0,
+            "planner.goal_tolerance",
+            p.goal_tolerance,
+            "must be positive and finite",
+        )?;
+        check(
+            p.max_iterations > 0,
+            "planner.max_iterations",
+            p.max_iterations,
+            "must be at least 1",
+        )?;
+        check(
+            (0.0..=1.0).contains(&p.goal_bias),
+            "planner.goal_bias",
+            p.goal_bias,
+            "must lie in [0, 1]",
+        )?;
+        if let Some(t) = p.time_limit {
+            check(
+                t.is_finite() && t > 0.0,
+                "planner.time_limit",
+                t,
+                "must be positive",
+            )?;
+        }
+        for (i, w) in spec.objective.as_array().into_iter().enumerate() {
+            check(
+                w.is_finite() && w >= 0.0,
+                format!("objective.lambda{i}"),
+                w,
+                "must be finite and not negative",
+            )?;
+        }
+        let o = &spec.optimizer;
+        check(
+            o.population >= 2,
+            "optimizer.population",
+            o.population,
+            "must be at least 2",
+        )?;
+        if let Some(t) = o.time_limit {
+            check(
+                t.is_finite() && t > 0.0,
+                "optimizer.time_limit",
+                t,
+                "must be positive",
+            )?;
+        }
+        if let Some(n) = o.evaluations {
+            check(n > 0, "optimizer.evaluations", n, "must be at least 1")?;
+        }
+        Ok(Scenario {
+            name: spec.name.clone().unwrap_or_else(|| "scenario".into()),
+            path: None,
+            seed: spec.seed,
+            space,
+            workspace,
+            planner: spec.planner.clone(),
+            objective: spec.objective.clone(),
+            optimizer: spec.optimizer.clone(),
+        })
+    }
+
+    fn design_space(spec: &ScenarioSpec) -> Result<DesignSpace> {
+        let r = &spec.robot;
+        check(r.links >= 1, "robot.links", r.links, "must be at least 1")?;
+        check(
+            r.link_radius.is_finite() && r.link_radius >= 0.0,
+            "robot.link_radius",
+            r.link_radius,
+            "must be finite and not negative",
+        )?;
+        check(
+            r.snap.is_finite() && r.snap >= 0.0,
+            "robot.snap",
+            r.snap,
+            "must be finite and not negative",
+        )?;
+        check(
+            r.base.is_finite(),
+            "robot.base",
+            format!("{:?}", r.base),
+            "must be finite",
+        )?;
+        check(
+            r.uniform.index.is_none(),
+            "robot.uniform.index",
+            r.uniform.index.unwrap_or(0),
+            "the uniform template applies to every link; use [[robot.link]] for one link",
+        )?;
+        let mut overrides: Vec<Option<(usize, &LinkSpec)>> = vec![None; r.links];
+        for (k, l) in r.link.iter().enumerate() {
+            let field = format!("robot.link[{k}].index");
+            let Some(i) = l.index else {
+                return Err(Error::invalid(
+                    field,
+                    "missing",
+                    "each override needs `index`",
+                ));
+            };
+            check(
+                (1..=r.links).contains(&i),
+                &field,
+                i,
+                &format!("must lie in 1..={}", r.links),
+            )?;
+            if let Some((prev, _)) = overrides[i - 1] {
+                return Err(Error::invalid(
+                    field,
+                    i,
+                    &format!("link {i} is already overridden by robot.link[{prev}]"),
+                ));
+            }
+            overrides[i - 1] = Some((k, l));
+        }
+        let mut links = Vec::with_capacity(r.links);
+        let mut vars = Vec::new();
+        for (i, ov) in overrides.iter().enumerate() {
+            let mut link = LinkDesign::default();
+            let mut axes = AxisRanges::default();
+            let params = [Param::Theta, Param::D, Param::A, Param::Alpha];
+            let pick = |f: fn(&LinkSpec) -> Option<ParamSpec>, name: &str| match ov
+                .and_then(|(k, l)| f(l).map(|p| (p, format!("robot.link[{k}].{name}"))))
+            {
+                Some(x) => x,
+                None => (
+                    f(&r.uniform).unwrap_or_default(),
+                    format!("robot.uniform.{name}"),
+                ),
+            };
+            let specs = [
+                pick(|l| l.theta, "theta"),
+                pick(|l| l.d, "d"),
+                pick(|l| l.a, "a"),
+                pick(|l| l.alpha, "alpha"),
+            ];
+            let mut values = [0.0; 4];
+            for ((param, (p, field)), value) in params.into_iter().zip(&specs).zip(&mut values) {
+                check_param(p, field)?;
+                *value = match *p {
+                    ParamSpec::Fixed(v) => v,
+                    ParamSpec::Free(lo, hi) => {
+                        vars.push(Variable {
+                            link: i + 1,
+                            param,
+                            lower: lo,
+                            upper: hi,
+                        });
+                        0.5 * (lo + hi)
+                    }
+                };
+            }
+            [link.theta, link.d, link.a, link.alpha] = values;
+            let uniform_axes = r.uniform.axes.unwrap_or_default().entries();
+            let override_axes = ov.and_then(|(_, l)| l.axes).map(|a| a.entries());
+            for axis in Axis::ALL {
+                let j = axis.index();
+                let (spec, field) = match override_axes.and_then(|a| a[j]) {
+                    Some(s) => (s, format!("robot.link[{}].axes.{axis}", ov.unwrap().0)),
+                    None => match uniform_axes[j] {
+                        Some(s) => (s, format!("robot.uniform.axes.{axis}")),
+                        None => continue,
+                    },
+                };
+                check_param(&spec.min, &format!("{field}.min"))?;
+                check_param(&spec.max, &format!("{field}.max"))?;
+                let mut range = Range::ZERO;
+                for (p, param, slot) in [
+                    (spec.min, Param::Min(axis), &mut range.min),
+                    (spec.max, Param::Max(axis), &mut range.max),
+                ] {
+                    *slot = match p {
+                        ParamSpec::Fixed(v) => v,
+                        ParamSpec::Free(lo, hi) => {
+                            vars.push(Variable {
+                                link: i + 1,
+                                param,
+                                lower: lo,
+                                upper: hi,
+                            });
+                            0.5 * (lo + hi)
+                        }
+                    };
+                }
+                if let (ParamSpec::Fixed(lo), ParamSpec::Fixed(hi)) = (spec.min, spec.max) {
+                    check(
+                        lo <= hi,
+                        &field,
+                        format!("{{ min = {lo}, max = {hi} }}"),
+                        "min must not exceed max",
+                    )?;
+                }
+                *axes.get_mut(axis) = range;
+            }
+            link.axes = axes;
+            links.push(link);
+        }
+        let template = Design {
+            base: r.base,
+            link_radius: r.link_radius,
+            colliders_per_link: r.colliders_per_link,
+            links,
+        };
+        let space = DesignSpace::new(template, vars, r.snap).map_err(at("robot"))?;
+        // The template's free values are placeholders: normalise them through decode.
+        let mid: Vec<f64> = space
+            .variables()
+            .iter()
+            .map(|v| 0.5 * (v.lower + v.upper))
+            .collect();
+        let template = space.decode(&mid);
+        DesignSpace::new(template, space.variables().to_vec(), r.snap)
+    }
+
+    fn workspace(spec: &ScenarioSpec) -> Result<Workspace> {
+        check(
+            spec.clearance.is_finite() && spec.clearance >= 0.0,
+            "clearance",
+            spec.clearance,
+            "must be finite and not negative",
+        )?;
+        let mut obstacles = Vec::with_capacity(spec.obstacle.len());
+        for (k, o) in spec.obstacle.iter().enumerate() {
+            obstacles.push(Self::obstacle(k, o)?);
+        }
+        let mut tasks = Vec::with_capacity(spec.task.len());
+        for (j, t) in spec.task.iter().enumerate() {
+            check(
+                t.point.iter().all(|v| v.is_finite()),
+                format!("task[{j}].point"),
+                fmt3(t.point),
+                "must be finite",
+            )?;
+            tasks.push(Point3::from(t.point));
+        }
+        Workspace::new(obstacles, tasks, spec.clearance)
+    }
+
+    fn obstacle(k: usize, o: &ObstacleSpec) -> Result<Obstacle> {
+        let prefix = format!("obstacle[{k}]");
+        let field = |f: &str| format!("{prefix}.{f}");
+        check(
+            o.position.iter().all(|v| v.is_finite()),
+            field("position"),
+            fmt3(o.position),
+            "must be finite",
+        )?;
+        let rpy = o.rpy.unwrap_or_default();
+        check(
+            rpy.iter().all(|v| v.is_finite()),
+            field("rpy"),
+            fmt3(rpy),
+            "must be finite",
+        )?;
+        let kind = match o.shape {
+            ShapeKind::Sphere => "sphere",
+            ShapeKind::Capsule => "capsule",
+            ShapeKind::Cuboid => "cuboid",
+            ShapeKind::Cylinder => "cylinder",
+        };
+        let need = |v: Option<f64>, f: &str| {
+            v.ok_or_else(|| Error::invalid(field(f), "missing", &format!("a {kind} needs `{f}`")))
+        };
+        let unused = |present: bool, f: &str| {
+            check(
+                !present,
+                field(f),
+                "given",
+                &format!("a {kind} has no `{f}`"),
+            )
+        };
+        let geometry = match o.shape {
+            ShapeKind::Sphere => {
+                unused(o.length.is_some(), "length")?;
+                unused(o.size.is_some(), "size")?;
+                ObstacleShape::Sphere {
+                    radius: need(o.radius, "radius")?,
+                }
+            }
+            ShapeKind::Capsule | ShapeKind::Cylinder => {
+                unused(o.size.is_some(), "size")?;
+                let radius = need(o.radius, "radius")?;
+                let length = need(o.length, "length")?;
+                if o.shape == ShapeKind::Capsule {
+                    ObstacleShape::Capsule { length, radius }
+                } else {
+                    ObstacleShape::Cylinder { length, radius }
+                }
+            }
+            ShapeKind::Cuboid => {
+                unused(o.radius.is_some(), "radius")?;
+                unused(o.length.is_some(), "length")?;
+                ObstacleShape::Cuboid {
+                    size: o.size.ok_or_else(|| {
+                        Error::invalid(field("size"), "missing", "a cuboid needs `size`")
+                    })?,
+                }
+            }
+        };
+        let placement = Placement {
+            position: o.position,
+            rpy,
+        };
+        let name = o.name.clone().unwrap_or_else(|| format!("{kind} {k}"));
+        Obstacle::new(name, geometry, placement.isometry()).map_err(at(&prefix))
+    }
+
+    /// Links of the scenario's largest design ([`DesignSpace::largest`]) that touch an obstacle
+    /// (within the clearance) in the home pose. A design whose home pose collides cannot move.
+    pub fn home_contacts(&self) -> Vec<Contact> {
+        let chain = self.space.largest().chain();
+        self.workspace.contacts(&chain, chain.home())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MINIMAL: &str = r#"
+[robot]
+links = 2
+uniform = { a = [0.0, 0.5], axes = { ry = { min = -3.0, max = 3.0 } } }
+
+[[task]]
+point = [0.5, 0.0, 0.2]
+"#;
+
+    #[test]
+    fn minimal_scenario_uses_documented_defaults() {
+        let s = Scenario::from_spec(&Scenario::parse(MINIMAL).unwrap()).unwrap();
+        assert_eq!(s.space.dim(), 2);
+        assert_eq!(s.planner, PlannerConfig::default());
+        assert_eq!(s.space.template().link_radius, 0.02);
+        assert_eq!(s.space.largest().links[1].a, 0.5);
+        assert_eq!(s.space.largest().chain().dof(), 2);
+    }
+
+    #[test]
+    fn override_replaces_uniform_fields() {
+        let text = format!("{MINIMAL}\n[[robot.link]]\nindex = 1\nd = 0.3\na = 0.0\naxes = {{ rz = {{ min = [-1.0, 0.0], max = 1.0 }} }}\n");
+        let s = Scenario::from_spec(&Scenario::parse(&text).unwrap()).unwrap();
+        let names: Vec<String> = s.space.variables().iter().map(|v| v.name()).collect();
+        assert_eq!(names, vec!["link1.rz.min", "link2.a"]);
+        let d = s.space.largest();
+        assert_eq!(d.links[0].d, 0.3);
+        assert_eq!(d.links[0].axes.get(Axis::Ry), Range::new(-3.0, 3.0));
+        assert_eq!(d.links[0].axes.get(Axis::Rz), Range::new(-1.0, 1.0));
+    }
+
+    #[test]
+    fn parse_errors_name_the_field_path_and_line() {
+        let text = format!(
+            "{MINIMAL}\n[[obstacle]]\nshape = \"sphere\"\nposition = [1, 0, 0]\nradus = 0.1\n"
+        );
+        let e = Scenario::parse(&text).unwrap_err().to_string();
+        assert!(e.contains("obstacle[0]") && e.contains("radus"), "{e}");
+        assert!(e.contains("line"), "{e}");
+    }
+}
