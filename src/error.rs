@@ -86,9 +86,14 @@ impl Error {
         }
     }
 
-    /// Attaches the file being processed, unless the error already names a file.
+    /// Attaches the file being processed, unless the error already names a file (a parse error
+    /// with an empty file name gets this one).
     pub fn in_file(self, file: impl Into<PathBuf>) -> Self {
         match self {
+            Error::Parse { file: f, message } if f.as_os_str().is_empty() => Error::Parse {
+                file: file.into(),
+                message,
+            },
             e @ (Error::Read { .. }
             | Error::Write { .. }
             | Error::Parse { .. }

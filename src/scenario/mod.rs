@@ -111,23 +111,24 @@ impl Scenario {
             file: PathBuf::new(),
             message,
         };
-        let de = toml::de::Deserializer::parse(text)
-            .map_err(|e| parse_error(e.to_string().trim().to_string()))?;
-        serde_path_to_error::deserialize(de).map_err(|e| {
-            let path = e.path().to_string();
-            let inner = e.into_inner();
-            let line = inner.span().map(|s| text[..s.start].lines().count().max(1));
-            let message = inner.message().to_string();
+        // One line per error: "line L, column C: [field path: ]message".
+        let describe = |path: Option<String>, e: &toml::de::Error| {
             let mut m = String::new();
-            if let Some(l) = line {
-                m.push_str(&format!("line {l}: "));
+            if let Some(span) = e.span() {
+                let before = &text[..span.start.min(text.len())];
+                let line = before.matches('\n').count() + 1;
+                let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
+                m.push_str(&format!("line {line}, column {column}: "));
             }
-            if path != "." {
-                m.push_str(&format!("{path}: "));
+            if let Some(p) = path.filter(|p| p != ".") {
+                m.push_str(&format!("{p}: "));
             }
-            m.push_str(&message);
-            parse_error(m)
-        })
+            m.push_str(&e.message().replace('\n', " "));
+            parse_error(m.trim_end().to_string())
+        };
+        let de = toml::de::Deserializer::parse(text).map_err(|e| describe(None, &e))?;
+        serde_path_to_error::deserialize(de)
+            .map_err(|e| describe(Some(e.path().to_string()), e.inner()))
     }
 
     /// Validates a raw scenario and builds the design space and workspace.
@@ -258,7 +259,7 @@ impl Scenario {
                 return Err(Error::invalid(
                     field,
                     i,
-                    &format!("link {i} is already overridden by robot.link[{prev}]"),
+                    format!("link {i} is already overridden by robot.link[{prev}]"),
                 ));
             }
             overrides[i - 1] = Some((k, l));
@@ -409,7 +410,7 @@ impl Scenario {
             ShapeKind::Cylinder => "cylinder",
         };
         let need = |v: Option<f64>, f: &str| {
-            v.ok_or_else(|| Error::invalid(field(f), "missing", &format!("a {kind} needs `{f}`")))
+            v.ok_or_else(|| Error::invalid(field(f), "missing", format!("a {kind} needs `{f}`")))
         };
         let unused = |present: bool, f: &str| {
             check(

@@ -1,0 +1,60 @@
+//! The README's examples are real: its scenario TOML validates, its design JSON loads, and its
+//! two set-up commands are the ones CI runs.
+
+use kinsynth::{Design, Scenario};
+use std::path::Path;
+
+fn readme() -> String {
+    std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md")).unwrap()
+}
+
+fn blocks(lang: &str) -> Vec<String> {
+    let text = readme();
+    let fence = format!("```{lang}\n");
+    text.split(&fence)
+        .skip(1)
+        .map(|b| b.split("```").next().unwrap().to_string())
+        .collect()
+}
+
+#[test]
+fn scenario_example_is_valid() {
+    let toml = blocks("toml");
+    assert_eq!(toml.len(), 1);
+    let spec = Scenario::parse(&toml[0]).unwrap();
+    let s = Scenario::from_spec(&spec).unwrap();
+    assert_eq!(s.space.template().links.len(), 8);
+    assert_eq!(s.workspace.obstacles.len(), 1);
+    assert_eq!(s.space.template().links[0].d, 0.3);
+}
+
+#[test]
+fn design_example_loads() {
+    let json = blocks("json");
+    assert_eq!(json.len(), 1);
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("design.json");
+    std::fs::write(&p, &json[0]).unwrap();
+    let d = Design::load(&p).unwrap();
+    assert_eq!(d.links.len(), 2);
+    assert_eq!(d.chain().dof(), 1);
+    // A best.json wraps the design.
+    std::fs::write(&p, format!("{{\"design\": {}, \"cost\": 1.0}}", json[0])).unwrap();
+    assert_eq!(Design::load(&p).unwrap(), d);
+}
+
+#[test]
+fn setup_commands_are_the_ones_ci_runs() {
+    let sh = blocks("sh");
+    assert_eq!(sh.len(), 2, "exactly two set-up commands");
+    assert!(sh[0].trim().starts_with("cargo run --release -- "));
+    assert_eq!(sh[1].trim(), "cargo test");
+    let ci =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(".ci/run")).unwrap();
+    assert!(ci.lines().any(|l| l.trim() == "cargo test"));
+    // The main-job command names a bundled scenario that exists.
+    let scenario = sh[0].split_whitespace().last().unwrap();
+    assert!(Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join(scenario)
+        .exists());
+}
