@@ -2,7 +2,7 @@
 
 use super::axis::{Axis, Range};
 use super::link::Link;
-use nalgebra::{IsometryMatrix3, Matrix3, Point3, Vector3};
+use nalgebra::{IsometryMatrix3, Matrix3, Point3, Rotation3, Vector3};
 
 /// An actuation axis that moves: a joint of the chain, with the link it belongs to.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -38,7 +38,12 @@ enum Op {
 #[derive(Clone, Debug)]
 struct ChainLink {
     transform: IsometryMatrix3<f64>,
-    body: Vec<Point3<f64>>,
+    /// The fixed rotation is the identity (θ = α = 0): skip the matrix product.
+    identity_rotation: bool,
+    /// Interior points of the body polyline (its ends are the two frame origins).
+    knees: Vec<Point3<f64>>,
+    /// The link has at least one body segment.
+    has_body: bool,
     ops: std::ops::Range<usize>,
     slider: bool,
     segments: std::ops::Range<usize>,
@@ -162,11 +167,13 @@ impl Chain {
                 slider |= !axis.is_rotation();
                 ops.push(op);
             }
-            let body = link.geometry.body.clone();
+            let body = &link.geometry.body;
             let n_seg = body.len().saturating_sub(1) + usize::from(slider);
             chain_links.push(ChainLink {
                 transform: link.geometry.transform,
-                body,
+                identity_rotation: link.geometry.transform.rotation == Rotation3::identity(),
+                knees: body[1..body.len().saturating_sub(1).max(1)].to_vec(),
+                has_body: body.len() > 1,
                 ops: start..ops.len(),
                 slider,
                 segments: segment_count..segment_count + n_seg,
@@ -272,26 +279,33 @@ impl Chain {
         let mut pos: Vector3<f64> = self.base.translation.vector;
         out.frames[0] = self.base;
         for (i, link) in self.links.iter().enumerate() {
-            // Body polyline, in the frame F_{i-1}.
+            // Body polyline, in the frame F_{i-1}: it starts at F_{i-1}'s origin and ends at the
+            // joint origin, so only its interior points need transforming.
             let mut seg = link.segments.start;
-            for w in link.body.windows(2) {
-                out.segments[seg] = [
-                    Point3::from(rot * w[0].coords + pos),
-                    Point3::from(rot * w[1].coords + pos),
-                ];
+            let mut prev = Point3::from(pos);
+            for knee in &link.knees {
+                let w = Point3::from(rot * knee.coords + pos);
+                out.segments[seg] = [prev, w];
+                prev = w;
                 seg += 1;
             }
             // Fixed geometry T_i.
             pos += rot * link.transform.translation.vector;
-            rot *= link.transform.rotation.matrix();
+            if !link.identity_rotation {
+                rot *= link.transform.rotation.matrix();
+            }
             let joint = Point3::from(pos);
+            if link.has_body {
+                out.segments[seg] = [prev, joint];
+                seg += 1;
+            }
             out.joints[i] = joint;
             // Actuation T_act,i.
             for op in &self.ops[link.ops.clone()] {
                 match *op {
                     Op::RotConst { axis, s, c } => rotate_local(&mut rot, axis, s, c),
                     Op::RotFree { axis, k } => {
-                        let (s, c) = a[k].sin_cos();
+                        let (s, c) = libm::sincos(a[k]);
                         rotate_local(&mut rot, axis, s, c);
                     }
                     Op::TransConst { axis, v } => pos += rot.column(axis.index() - 3) * v,
@@ -305,7 +319,7 @@ impl Chain {
             out.positions[i] = origin;
             let f = &mut out.frames[i + 1];
             f.translation.vector = pos;
-            // SAFETY of invariants: `rot` is a product of rotations, so it stays orthonormal.
+            // `rot` is a product of rotations, so it stays orthonormal.
             *f.rotation.matrix_mut_unchecked() = rot;
         }
     }
