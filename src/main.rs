@@ -33,6 +33,23 @@ enum Command {
         /// The scenario file (TOML).
         file: PathBuf,
     },
+    /// Compare the four edge checkers with the dense-sampling oracle on random edges.
+    Edges {
+        /// The scenario file (TOML).
+        file: PathBuf,
+        /// Step bounds L_max to test (comma-separated). Default: π/40, π/8, π/4.
+        #[arg(long, value_delimiter = ',')]
+        lmax: Vec<f64>,
+        /// Edges per L_max.
+        #[arg(long, default_value_t = 2000)]
+        count: usize,
+        /// Seed of the random edges.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// Oracle sub-steps per edge.
+        #[arg(long, default_value_t = kinsynth::collision::oracle::ORACLE_SUBSTEPS)]
+        substeps: usize,
+    },
 }
 
 fn run(cli: Cli) -> Result<(), kinsynth::Error> {
@@ -85,6 +102,57 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
                     c.distance,
                     s.workspace.clearance
                 );
+            }
+        }
+        Command::Edges {
+            file,
+            lmax,
+            count,
+            seed,
+            substeps,
+        } => {
+            use kinsynth::collision::{make_checker, oracle, CheckerKind, CollisionScene};
+            use std::f64::consts::PI;
+            let s = Scenario::load(&file)?;
+            let chain = s.space.largest().chain();
+            let scene = std::sync::Arc::new(CollisionScene::new(&s.workspace));
+            let lmax = if lmax.is_empty() {
+                vec![PI / 40.0, PI / 8.0, PI / 4.0]
+            } else {
+                lmax
+            };
+            println!(
+                "{}: largest design, {} edges per L_max, oracle {} sub-steps, body model {}",
+                file.display(),
+                count,
+                substeps,
+                s.planner.body.name()
+            );
+            println!(
+                "{:>8} {:>10} {:>8} {:>11} {:>13} {:>12}",
+                "L_max", "checker", "blocked", "false-free", "false-blocked", "µs/edge"
+            );
+            for l in lmax {
+                let edges = oracle::sample_edges(&scene, &chain, l, s.planner.lambda, count, seed);
+                let verdicts: Vec<_> = edges
+                    .iter()
+                    .map(|(a, b)| oracle::judge_edge(&scene, &chain, a, b, substeps))
+                    .collect();
+                for kind in CheckerKind::ALL {
+                    let checker = make_checker(kind, scene.clone(), s.planner.body);
+                    let r = oracle::agreement(checker.as_ref(), &chain, &edges, &verdicts);
+                    println!(
+                        "{:>8.4} {:>10} {:>8} {:>5} {:>5.1}% {:>6} {:>5.1}% {:>12.2}",
+                        l,
+                        r.checker,
+                        r.blocked,
+                        r.false_free,
+                        100.0 * r.false_free_rate(),
+                        r.false_blocked,
+                        100.0 * r.false_blocked_rate(),
+                        1e6 * r.seconds_per_edge
+                    );
+                }
             }
         }
     }

@@ -78,6 +78,19 @@ pub struct Chain {
     segment_count: usize,
 }
 
+/// See [`Chain::arc_layout`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct ArcLayout {
+    /// Arc position of each link's joint origin (link `i` at index `i − 1`).
+    pub joint: Vec<f64>,
+    /// Arc position of the far end of each body segment.
+    pub segment_end: Vec<f64>,
+    /// Link (from 1) owning each segment.
+    pub segment_link: Vec<usize>,
+    /// True for slider segments (moved by their own link's axes too).
+    pub segment_slider: Vec<bool>,
+}
+
 /// Caller-owned output of [`Chain::fk`]; allocate once with [`Chain::frames`] and reuse.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Frames {
@@ -101,6 +114,20 @@ impl Frames {
     pub fn position_coords(&self) -> impl Iterator<Item = f64> + '_ {
         self.positions.iter().flat_map(|p| p.coords.iter().copied())
     }
+}
+
+/// The step length of paper Eq. 10 between configurations `a` and `b` with frames `fa`, `fb`:
+/// `‖f(b) − f(a)‖ + λ‖b − a‖`, where `f` stacks all joint positions ([`Frames::positions`],
+/// `3n` values).
+pub fn step_length(fa: &Frames, fb: &Frames, a: &[f64], b: &[f64], lambda: f64) -> f64 {
+    let df: f64 = fa
+        .positions
+        .iter()
+        .zip(&fb.positions)
+        .map(|(p, q)| (q - p).norm_squared())
+        .sum();
+    let da: f64 = a.iter().zip(b).map(|(x, y)| (y - x) * (y - x)).sum();
+    df.sqrt() + lambda * da.sqrt()
 }
 
 /// Right-multiplies `r` by the elementary rotation about `axis` given `sin` and `cos`; only two
@@ -248,6 +275,59 @@ impl Chain {
             .iter()
             .position(|l| l.segments.contains(&s))
             .map_or(0, |i| i + 1)
+    }
+
+    /// Arc-length layout of the body, the basis of configuration-independent motion bounds:
+    /// walking the chain from the base, every body segment adds its (fixed) length and every
+    /// slider its largest possible extension `sqrt(Σ max(|min|, |max|)²)` over the link's
+    /// translation axes. Any two points of the body are at most their arc-length difference
+    /// apart, in every configuration (triangle inequality along the chain).
+    pub fn arc_layout(&self) -> ArcLayout {
+        let mut pos = 0.0;
+        let mut joint = Vec::with_capacity(self.links.len());
+        let mut segment_end = Vec::with_capacity(self.segment_count);
+        let mut segment_link = Vec::with_capacity(self.segment_count);
+        let mut segment_slider = Vec::with_capacity(self.segment_count);
+        for (i, link) in self.links.iter().enumerate() {
+            let end = Point3::from(link.transform.translation.vector);
+            let mut prev = Point3::origin();
+            for p in link
+                .knees
+                .iter()
+                .copied()
+                .chain(link.has_body.then_some(end))
+            {
+                pos += (p - prev).norm();
+                prev = p;
+                segment_end.push(pos);
+                segment_link.push(i + 1);
+                segment_slider.push(false);
+            }
+            joint.push(pos);
+            if link.slider {
+                let mut ext2 = 0.0;
+                for op in &self.ops[link.ops.clone()] {
+                    match *op {
+                        Op::TransConst { v, .. } => ext2 += v * v,
+                        Op::TransFree { k, .. } => {
+                            let r = self.free[k].range;
+                            ext2 += r.min.abs().max(r.max.abs()).powi(2);
+                        }
+                        _ => {}
+                    }
+                }
+                pos += ext2.sqrt();
+                segment_end.push(pos);
+                segment_link.push(i + 1);
+                segment_slider.push(true);
+            }
+        }
+        ArcLayout {
+            joint,
+            segment_end,
+            segment_link,
+            segment_slider,
+        }
     }
 
     /// A frame buffer sized for this chain, to pass to [`Chain::fk`].

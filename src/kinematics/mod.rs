@@ -7,6 +7,6 @@ pub mod link;
 pub mod placement;
 
 pub use axis::{Axis, Range};
-pub use chain::{Chain, Frames, FreeAxis};
+pub use chain::{step_length, ArcLayout, Chain, Frames, FreeAxis};
 pub use link::{Dh, Link, LinkGeometry};
 pub use placement::Placement;

@@ -1,54 +1,8 @@
 //! Settings sections of a scenario: planner, objective weights, optimiser. Every field has a
 //! documented default so a scenario may leave a section out.
 
+use crate::collision::{BodyModel, CheckerKind};
 use serde::{Deserialize, Serialize};
-
-/// Edge-checking strategy, chosen by name in `planner.checker` and `--checker`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum CheckerKind {
-    /// End configuration only (the paper's §IV baseline; safe only with a small `L_max`).
-    Discrete,
-    /// The paper's §III-A fast path: point colliders and the segments they sweep.
-    #[default]
-    Segment,
-    /// Continuous collision detection of the link capsules with parry shape casts.
-    Ccd,
-    /// Conservative advancement with chain motion bounds: free only when proven free.
-    Certified,
-}
-
-impl CheckerKind {
-    /// All strategies.
-    pub const ALL: [CheckerKind; 4] = [
-        CheckerKind::Discrete,
-        CheckerKind::Segment,
-        CheckerKind::Ccd,
-        CheckerKind::Certified,
-    ];
-
-    /// The name used in files and on the command line.
-    pub fn name(self) -> &'static str {
-        match self {
-            CheckerKind::Discrete => "discrete",
-            CheckerKind::Segment => "segment",
-            CheckerKind::Ccd => "ccd",
-            CheckerKind::Certified => "certified",
-        }
-    }
-}
-
-impl std::str::FromStr for CheckerKind {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        CheckerKind::ALL
-            .into_iter()
-            .find(|k| k.name() == s)
-            .ok_or_else(|| {
-                format!("unknown checker `{s}` (expected discrete, segment, ccd or certified)")
-            })
-    }
-}
 
 /// The `[planner]` section: the RRT that decides reachability (paper §II-D, Eq. 10).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -56,6 +10,9 @@ impl std::str::FromStr for CheckerKind {
 pub struct PlannerConfig {
     /// Edge checker. Default `segment`.
     pub checker: CheckerKind,
+    /// Body model used by the `discrete` and `segment` checkers: `capsules` (the real body) or
+    /// `points` (the paper's point colliders). Default `capsules`.
+    pub body: BodyModel,
     /// Step bound `L_max` of paper Eq. 10 on `‖Δf‖ + λ‖Δa‖`. Default π/4 (paper §IV).
     pub l_max: f64,
     /// Weight `λ` of the actuation-space step in the metric of Eq. 10. Default 0.1.
@@ -75,6 +32,7 @@ impl Default for PlannerConfig {
     fn default() -> Self {
         PlannerConfig {
             checker: CheckerKind::Segment,
+            body: BodyModel::Capsules,
             l_max: std::f64::consts::FRAC_PI_4,
             lambda: 0.1,
             goal_tolerance: 0.02,

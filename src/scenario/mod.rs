@@ -5,7 +5,8 @@ pub mod config;
 pub mod file;
 pub mod preset;
 
-pub use config::{Algorithm, CheckerKind, ObjectiveWeights, OptimizerConfig, PlannerConfig};
+pub use crate::collision::{BodyModel, CheckerKind};
+pub use config::{Algorithm, ObjectiveWeights, OptimizerConfig, PlannerConfig};
 pub use file::{AxesSpec, AxisSpec, LinkSpec, ObstacleSpec, ParamSpec, ScenarioSpec, ShapeKind};
 
 use crate::design::{AxisRanges, Design, DesignSpace, LinkDesign, Param, Variable};

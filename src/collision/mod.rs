@@ -1,0 +1,13 @@
+//! Collision checking of the robot body against the workspace: closed-form distances, the
+//! scene with its broad phase, body models, the four edge checkers and the dense-sampling
+//! oracle.
+
+pub mod body;
+pub mod distance;
+pub mod edge;
+pub mod oracle;
+pub mod scene;
+
+pub use body::BodyModel;
+pub use edge::{make_checker, CheckerKind, EdgeChecker, EdgeStats, Scratch};
+pub use scene::CollisionScene;

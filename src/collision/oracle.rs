@@ -1,0 +1,195 @@
+//! The ground truth for edges: dense sampling of the motion with the exact capsule distance at
+//! every sample. For tests and reports only; the planner never uses it.
+
+use super::body::capsules_min_distance;
+use super::scene::CollisionScene;
+use crate::kinematics::{step_length, Chain};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// Default number of sub-steps of an oracle edge (the samples are `t = i/N`, `i = 0 … N`).
+pub const ORACLE_SUBSTEPS: usize = 2000;
+
+/// What the oracle found along an edge.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OracleVerdict {
+    /// True when every sample keeps every capsule farther than the clearance.
+    pub free: bool,
+    /// Smallest capsule–obstacle distance over the samples.
+    pub min_distance: f64,
+    /// Parameter `t` of the first colliding sample, if any.
+    pub first_hit: Option<f64>,
+}
+
+/// Judges an edge by sampling it `substeps + 1` times with the exact capsule distances. It
+/// stops at the first colliding sample.
+pub fn judge_edge(
+    scene: &CollisionScene,
+    chain: &Chain,
+    from: &[f64],
+    to: &[f64],
+    substeps: usize,
+) -> OracleVerdict {
+    let mut frames = chain.frames();
+    let mut q = vec![0.0; from.len()];
+    let mut min_distance = f64::INFINITY;
+    let r = chain.radius();
+    for i in 0..=substeps {
+        let t = i as f64 / substeps as f64;
+        for ((qi, a), b) in q.iter_mut().zip(from).zip(to) {
+            *qi = a + t * (b - a);
+        }
+        chain.fk(&q, &mut frames);
+        // Exact below the running minimum (culled above it), so `min_distance` is exact.
+        for s in &frames.segments {
+            min_distance = min_distance.min(scene.min_distance(&s[0], &s[1], r, min_distance));
+        }
+        if min_distance <= scene.clearance() {
+            return OracleVerdict {
+                free: false,
+                min_distance,
+                first_hit: Some(t),
+            };
+        }
+    }
+    OracleVerdict {
+        free: true,
+        min_distance,
+        first_hit: None,
+    }
+}
+
+/// Random edges like the planner's: a start configuration drawn uniformly in the ranges whose
+/// body is clear (capsules, by exact distance), steered toward another uniform sample and cut
+/// back (by bisection on the step parameter) until the step metric of paper Eq. 10,
+/// `‖f(b) − f(a)‖ + λ‖b − a‖`, is at most `l_max`. Deterministic for a seed.
+pub fn sample_edges(
+    scene: &CollisionScene,
+    chain: &Chain,
+    l_max: f64,
+    lambda: f64,
+    count: usize,
+    seed: u64,
+) -> Vec<(Vec<f64>, Vec<f64>)> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut fa = chain.frames();
+    let mut fb = chain.frames();
+    let mut out = Vec::with_capacity(count);
+    let draw = |rng: &mut ChaCha8Rng| -> Vec<f64> {
+        chain
+            .free_axes()
+            .iter()
+            .map(|f| rng.random_range(f.range.min..=f.range.max))
+            .collect()
+    };
+    let mut attempts = 0usize;
+    while out.len() < count {
+        attempts += 1;
+        assert!(
+            attempts < 1000 * count + 10_000,
+            "no collision-free start configurations in this scene"
+        );
+        let a = draw(&mut rng);
+        chain.fk(&a, &mut fa);
+        if capsules_min_distance(scene, chain, &fa) <= scene.clearance() {
+            continue;
+        }
+        let target = draw(&mut rng);
+        let at = |s: f64| -> Vec<f64> {
+            a.iter()
+                .zip(&target)
+                .map(|(x, y)| x + s * (y - x))
+                .collect()
+        };
+        let mut b = target.clone();
+        chain.fk(&b, &mut fb);
+        if step_length(&fa, &fb, &a, &b, lambda) > l_max {
+            let (mut lo, mut hi) = (0.0, 1.0);
+            for _ in 0..40 {
+                let mid = 0.5 * (lo + hi);
+                let c = at(mid);
+                chain.fk(&c, &mut fb);
+                if step_length(&fa, &fb, &a, &c, lambda) > l_max {
+                    hi = mid;
+                } else {
+                    lo = mid;
+                }
+            }
+            b = at(lo);
+        }
+        out.push((a, b));
+    }
+    out
+}
+
+/// How one checker's verdicts compare with the oracle's over a set of edges.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Agreement {
+    /// Checker name.
+    pub checker: String,
+    /// Edges compared.
+    pub edges: usize,
+    /// Edges the oracle finds blocked.
+    pub blocked: usize,
+    /// Edges the checker calls free that the oracle finds blocked (unsafe errors).
+    pub false_free: usize,
+    /// Edges the checker calls blocked that the oracle finds free (lost motions).
+    pub false_blocked: usize,
+    /// Mean wall-clock time per edge (seconds), node check of the start included.
+    pub seconds_per_edge: f64,
+}
+
+impl Agreement {
+    /// `false_free / blocked` (0 when no edge is blocked).
+    pub fn false_free_rate(&self) -> f64 {
+        if self.blocked == 0 {
+            0.0
+        } else {
+            self.false_free as f64 / self.blocked as f64
+        }
+    }
+
+    /// `false_blocked / free` (0 when no edge is free).
+    pub fn false_blocked_rate(&self) -> f64 {
+        let free = self.edges - self.blocked;
+        if free == 0 {
+            0.0
+        } else {
+            self.false_blocked as f64 / free as f64
+        }
+    }
+}
+
+/// Judges every edge with the oracle (`verdicts`, from [`judge_edge`]) and compares a checker's
+/// `edge_free` answers with them.
+pub fn agreement(
+    checker: &dyn super::EdgeChecker,
+    chain: &Chain,
+    edges: &[(Vec<f64>, Vec<f64>)],
+    verdicts: &[OracleVerdict],
+) -> Agreement {
+    let mut scratch = super::Scratch::new(chain);
+    let mut false_free = 0;
+    let mut false_blocked = 0;
+    let start = std::time::Instant::now();
+    let answers: Vec<bool> = edges
+        .iter()
+        .map(|(a, b)| checker.edge_free(chain, a, b, &mut scratch))
+        .collect();
+    let seconds = start.elapsed().as_secs_f64();
+    for (free, v) in answers.iter().zip(verdicts) {
+        match (*free, v.free) {
+            (true, false) => false_free += 1,
+            (false, true) => false_blocked += 1,
+            _ => {}
+        }
+    }
+    Agreement {
+        checker: checker.name().to_string(),
+        edges: edges.len(),
+        blocked: verdicts.iter().filter(|v| !v.free).count(),
+        false_free,
+        false_blocked,
+        seconds_per_edge: seconds / edges.len().max(1) as f64,
+    }
+}

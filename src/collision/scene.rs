@@ -1,0 +1,151 @@
+//! The obstacles as the edge checkers see them: exact distances with closed forms where the
+//! shape allows, parry elsewhere, and bounding-sphere culling as the broad phase.
+
+use super::distance::{point_segment, segment_segment};
+use crate::world::convert::{from_parry_point, to_parry_point};
+use crate::world::{Obstacle, ObstacleShape, Workspace};
+use nalgebra::Point3;
+use parry3d_f64::math::Pose;
+use parry3d_f64::query;
+use parry3d_f64::shape::{Ball, Segment};
+
+/// How the distance to one obstacle is computed.
+#[derive(Clone, Debug)]
+enum Exact {
+    /// Closed form: a ball.
+    Sphere { center: Point3<f64>, radius: f64 },
+    /// Closed form: a capsule (segment `a`–`b` swept by `radius`).
+    Capsule {
+        a: Point3<f64>,
+        b: Point3<f64>,
+        radius: f64,
+    },
+    /// parry's distance query on the obstacle's shape.
+    General,
+}
+
+/// Obstacles, clearance, and a per-obstacle bounding sphere for culling.
+///
+/// Distances between the robot's parts (capsules: a segment and a radius; point colliders are
+/// zero-length capsules) and the obstacles are *signed* where the closed forms allow (negative
+/// when overlapping) and clamped at 0 for parry's shapes; either way `distance ≤ clearance`
+/// means a collision.
+#[derive(Clone, Debug)]
+pub struct CollisionScene {
+    obstacles: Vec<Obstacle>,
+    exact: Vec<Exact>,
+    bounds: Vec<(Point3<f64>, f64)>,
+    clearance: f64,
+}
+
+impl CollisionScene {
+    /// The scene of a workspace.
+    pub fn new(workspace: &Workspace) -> Self {
+        let obstacles = workspace.obstacles.clone();
+        let mut exact = Vec::with_capacity(obstacles.len());
+        let mut bounds = Vec::with_capacity(obstacles.len());
+        for o in &obstacles {
+            let bs = o.shape().compute_bounding_sphere(o.pose());
+            bounds.push((from_parry_point(bs.center()), bs.radius()));
+            exact.push(match o.geometry {
+                ObstacleShape::Sphere { radius } => Exact::Sphere {
+                    center: Point3::from(o.placement.translation.vector),
+                    radius,
+                },
+                ObstacleShape::Capsule { length, radius } => {
+                    let h = nalgebra::Vector3::new(0.0, 0.0, 0.5 * length);
+                    Exact::Capsule {
+                        a: o.placement * Point3::from(-h),
+                        b: o.placement * Point3::from(h),
+                        radius,
+                    }
+                }
+                _ => Exact::General,
+            });
+        }
+        CollisionScene {
+            obstacles,
+            exact,
+            bounds,
+            clearance: workspace.clearance,
+        }
+    }
+
+    /// The clearance `ε`: a part at distance `≤ ε` from an obstacle collides.
+    pub fn clearance(&self) -> f64 {
+        self.clearance
+    }
+
+    /// The obstacles.
+    pub fn obstacles(&self) -> &[Obstacle] {
+        &self.obstacles
+    }
+
+    /// Number of obstacles.
+    pub fn len(&self) -> usize {
+        self.obstacles.len()
+    }
+
+    /// True when there is no obstacle.
+    pub fn is_empty(&self) -> bool {
+        self.obstacles.is_empty()
+    }
+
+    /// A lower bound of the distance between the capsule (`a`–`b`, `radius`) and obstacle `k`,
+    /// from its bounding sphere; exact for spheres.
+    #[inline]
+    pub fn lower_bound(&self, k: usize, a: &Point3<f64>, b: &Point3<f64>, radius: f64) -> f64 {
+        let (c, r) = &self.bounds[k];
+        point_segment(c, a, b) - r - radius
+    }
+
+    /// Distance between the capsule (`a`–`b`, `radius`) and obstacle `k`.
+    #[inline]
+    pub fn distance(&self, k: usize, a: &Point3<f64>, b: &Point3<f64>, radius: f64) -> f64 {
+        match &self.exact[k] {
+            Exact::Sphere { center, radius: r } => point_segment(center, a, b) - r - radius,
+            Exact::Capsule {
+                a: p,
+                b: q,
+                radius: r,
+            } => segment_segment(a, b, p, q) - r - radius,
+            Exact::General => {
+                let o = &self.obstacles[k];
+                let d = if a == b {
+                    let ball = Ball::new(radius);
+                    let pose = Pose::from_translation(to_parry_point(a));
+                    query::distance(&pose, &ball, o.pose(), o.shape().as_ref())
+                        .map_or(0.0, |d| d.distance)
+                } else {
+                    let seg = Segment::new(to_parry_point(a), to_parry_point(b));
+                    query::distance(&Pose::IDENTITY, &seg, o.pose(), o.shape().as_ref())
+                        .map_or(0.0, |d| (d.distance - radius).max(0.0))
+                };
+                d
+            }
+        }
+    }
+
+    /// Smallest distance between the capsule and any obstacle, culled: an obstacle whose
+    /// bounding sphere is farther than the best distance so far (or than `stop`) is skipped.
+    /// The result is exact when it is below `stop`; otherwise it is some value `≥ stop`.
+    pub fn min_distance(&self, a: &Point3<f64>, b: &Point3<f64>, radius: f64, stop: f64) -> f64 {
+        let mut best = f64::INFINITY;
+        for k in 0..self.obstacles.len() {
+            let cap = best.min(stop);
+            if self.lower_bound(k, a, b, radius) >= cap {
+                continue;
+            }
+            best = best.min(self.distance(k, a, b, radius));
+        }
+        best
+    }
+
+    /// True when the capsule is farther than the clearance from every obstacle.
+    pub fn capsule_free(&self, a: &Point3<f64>, b: &Point3<f64>, radius: f64) -> bool {
+        let eps = self.clearance;
+        (0..self.obstacles.len()).all(|k| {
+            self.lower_bound(k, a, b, radius) > eps || self.distance(k, a, b, radius) > eps
+        })
+    }
+}
