@@ -1,0 +1,3 @@
+//! The robot's environment: obstacle geometry.
+
+pub mod mesh;
