@@ -1,0 +1,1329 @@
+//! Loading obstacle triangle meshes from STL and OBJ files, and turning them
+//! into parry collision shapes.
+//!
+//! [`load_mesh`] reads a file into a [`MeshData`] (an indexed triangle mesh
+//! with `f64` vertices) and checks that it is usable: it has triangles, every
+//! vertex is finite, every triangle index is in range and not every triangle
+//! has zero area. Errors name the file and say exactly what is wrong.
+//!
+//! A [`MeshData`] can then be converted into a parry [`TriMesh`]
+//! ([`MeshData::to_parry_trimesh`]), a convex hull
+//! ([`MeshData::to_convex_hull`]) or an approximate convex decomposition
+//! ([`MeshData::to_convex_decomposition`]).
+//!
+//! Triangles follow the usual convention of STL, OBJ and parry: the vertices
+//! of a triangle are listed counter-clockwise when seen from outside, so the
+//! right-hand normal points out of the solid.
+
+use std::borrow::Cow;
+use std::fmt;
+use std::io::Cursor;
+use std::path::{Path, PathBuf};
+
+use parry3d_f64::math::{Pose, Vector};
+use parry3d_f64::shape::{SharedShape, TriMesh, TriMeshBuilderError, TriMeshFlags};
+use parry3d_f64::transformation::vhacd::{VHACDParameters, VHACD};
+
+/// An indexed triangle mesh with `f64` vertex coordinates.
+///
+/// Produced by [`load_mesh`]; can also be built by hand, in which case
+/// [`MeshData::validate`] checks it.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct MeshData {
+    /// Vertex positions `[x, y, z]`, in the units of the source file.
+    pub vertices: Vec<[f64; 3]>,
+    /// Triangles as indices into [`MeshData::vertices`], counter-clockwise
+    /// when seen from outside the solid.
+    pub triangles: Vec<[u32; 3]>,
+}
+
+/// A problem with the contents of a mesh, independent of where it came from.
+///
+/// Returned by [`MeshData::validate`]; [`load_mesh`] reports the same problems
+/// as [`MeshError`] variants that also name the file.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum MeshDefect {
+    /// The mesh has no triangles.
+    #[error("mesh has no triangles")]
+    Empty,
+    /// A vertex has a NaN or infinite coordinate.
+    #[error("vertex {index} is not finite: {}", FmtPoint(.value))]
+    NonFiniteVertex {
+        /// Index of the first offending vertex.
+        index: usize,
+        /// Its coordinates.
+        value: [f64; 3],
+    },
+    /// A triangle refers to a vertex that does not exist.
+    #[error(
+        "triangle {triangle} refers to vertex {vertex}, but the mesh has only {vertex_count} vertices"
+    )]
+    IndexOutOfRange {
+        /// Index of the first offending triangle.
+        triangle: usize,
+        /// The out-of-range vertex index it contains.
+        vertex: u32,
+        /// Number of vertices in the mesh.
+        vertex_count: usize,
+    },
+    /// Every triangle has zero area (relative to the size of the mesh).
+    #[error("mesh is degenerate: all {triangle_count} triangles have zero area")]
+    Degenerate {
+        /// Number of triangles in the mesh.
+        triangle_count: usize,
+    },
+}
+
+/// Why [`load_mesh`] could not load a mesh file.
+///
+/// Every message starts with the path of the file.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum MeshError {
+    /// The file is missing or could not be read.
+    #[error("{}: cannot read file: {error}", .path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The underlying I/O error.
+        error: std::io::Error,
+    },
+    /// The file extension is not one of the supported formats.
+    #[error(
+        "{}: unsupported mesh format: {} (expected .stl or .obj)",
+        .path.display(),
+        FmtExtension(.extension.as_deref())
+    )]
+    UnknownExtension {
+        /// The file.
+        path: PathBuf,
+        /// Its extension (without the dot), if it has one.
+        extension: Option<String>,
+    },
+    /// The file could not be parsed.
+    #[error("{}: cannot parse as {format}: {message}", .path.display())]
+    Parse {
+        /// The file.
+        path: PathBuf,
+        /// The format the file was parsed as: `"binary STL"`, `"ASCII STL"` or `"OBJ"`.
+        format: &'static str,
+        /// What the parser reported.
+        message: String,
+    },
+    /// The file contains no triangles.
+    #[error("{}: mesh has no triangles", .path.display())]
+    Empty {
+        /// The file.
+        path: PathBuf,
+    },
+    /// A vertex has a NaN or infinite coordinate.
+    #[error("{}: vertex {index} is not finite: {}", .path.display(), FmtPoint(.value))]
+    NonFiniteVertex {
+        /// The file.
+        path: PathBuf,
+        /// Index of the first offending vertex in the loaded mesh.
+        index: usize,
+        /// Its coordinates.
+        value: [f64; 3],
+    },
+    /// A triangle refers to a vertex that does not exist.
+    #[error(
+        "{}: triangle {triangle} refers to vertex {vertex}, but the mesh has only {vertex_count} vertices",
+        .path.display()
+    )]
+    IndexOutOfRange {
+        /// The file.
+        path: PathBuf,
+        /// Index of the first offending triangle.
+        triangle: usize,
+        /// The out-of-range vertex index it contains.
+        vertex: u32,
+        /// Number of vertices in the mesh.
+        vertex_count: usize,
+    },
+    /// Every triangle has zero area (relative to the size of the mesh).
+    #[error(
+        "{}: mesh is degenerate: all {triangle_count} triangles have zero area",
+        .path.display()
+    )]
+    Degenerate {
+        /// The file.
+        path: PathBuf,
+        /// Number of triangles in the mesh.
+        triangle_count: usize,
+    },
+}
+
+impl MeshError {
+    /// The file the error is about.
+    pub fn path(&self) -> &Path {
+        match self {
+            MeshError::Io { path, .. }
+            | MeshError::UnknownExtension { path, .. }
+            | MeshError::Parse { path, .. }
+            | MeshError::Empty { path }
+            | MeshError::NonFiniteVertex { path, .. }
+            | MeshError::IndexOutOfRange { path, .. }
+            | MeshError::Degenerate { path, .. } => path,
+        }
+    }
+
+    /// Attaches `path` to a content problem.
+    fn from_defect(path: &Path, defect: MeshDefect) -> Self {
+        let path = path.to_path_buf();
+        match defect {
+            MeshDefect::Empty => MeshError::Empty { path },
+            MeshDefect::NonFiniteVertex { index, value } => {
+                MeshError::NonFiniteVertex { path, index, value }
+            }
+            MeshDefect::IndexOutOfRange {
+                triangle,
+                vertex,
+                vertex_count,
+            } => MeshError::IndexOutOfRange {
+                path,
+                triangle,
+                vertex,
+                vertex_count,
+            },
+            MeshDefect::Degenerate { triangle_count } => MeshError::Degenerate {
+                path,
+                triangle_count,
+            },
+        }
+    }
+}
+
+/// Why a [`MeshData`] could not be converted into a parry shape.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ShapeError {
+    /// The mesh failed [`MeshData::validate`].
+    #[error(transparent)]
+    InvalidMesh(#[from] MeshDefect),
+    /// parry refused to build the triangle mesh.
+    #[error("cannot build a parry triangle mesh: {0}")]
+    TriMesh(TriMeshBuilderError),
+    /// The convex decomposition produced no usable convex part. (A flat mesh
+    /// still gives one flat part; this guards against inputs for which parry
+    /// finds none.)
+    #[error("convex decomposition produced no convex parts")]
+    EmptyDecomposition,
+}
+
+/// Formats a point as `[x, y, z]` with the shortest exact decimal form of
+/// each coordinate (`NaN`, `inf` for non-finite ones).
+struct FmtPoint<'a>(&'a [f64; 3]);
+
+impl fmt::Display for FmtPoint<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let [x, y, z] = self.0;
+        write!(f, "[{x}, {y}, {z}]")
+    }
+}
+
+/// Formats a file extension for [`MeshError::UnknownExtension`].
+struct FmtExtension<'a>(Option<&'a str>);
+
+impl fmt::Display for FmtExtension<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.0 {
+            Some(ext) => write!(f, "file extension \".{ext}\""),
+            None => f.write_str("no file extension"),
+        }
+    }
+}
+
+/// Flags used by [`MeshData::to_parry_trimesh`].
+///
+/// * `ORIENTED` computes the pseudo-normals parry needs to tell the inside of
+///   a closed, outward-oriented mesh from the outside; without it
+///   `contains_point` is false and `project_point(.., solid = true)` reports
+///   `is_inside == false` for every point not exactly on the surface.
+/// * `MERGE_DUPLICATE_VERTICES` makes triangles that share a position share a
+///   vertex index. parry accumulates the edge and vertex pseudo-normals per
+///   index, and the containment test (Baerentzen's angle-weighted
+///   pseudo-normals) assumes they average all triangles around an edge or
+///   vertex; a "triangle soup" (every triangle with its own three vertices,
+///   as OBJ files with per-face normals load) would only see one triangle.
+/// * `DELETE_DEGENERATE_TRIANGLES` drops triangles that have two equal
+///   vertices after merging; their zero normal can make points whose closest
+///   feature lies on such a triangle count as inside.
+const TRIMESH_FLAGS: TriMeshFlags = TriMeshFlags::ORIENTED
+    .union(TriMeshFlags::MERGE_DUPLICATE_VERTICES)
+    .union(TriMeshFlags::DELETE_DEGENERATE_TRIANGLES);
+
+/// Voxel grid resolution (along the longest side of the mesh bounding box)
+/// used by [`MeshData::to_convex_decomposition`].
+const DECOMPOSITION_RESOLUTION: u32 = 32;
+
+/// A triangle whose doubled area is at most this fraction of the squared
+/// bounding-box diagonal counts as having zero area.
+const ZERO_AREA_RELATIVE: f64 = 1e-12;
+
+impl MeshData {
+    /// Checks that the mesh is usable: it has at least one triangle, all
+    /// vertices are finite, all triangle indices are in range, and at least
+    /// one triangle has non-zero area.
+    ///
+    /// Closedness and orientation are *not* checked: open meshes are valid
+    /// obstacles, they just have no inside.
+    pub fn validate(&self) -> Result<(), MeshDefect> {
+        if self.triangles.is_empty() {
+            return Err(MeshDefect::Empty);
+        }
+        if let Some((index, value)) = self
+            .vertices
+            .iter()
+            .enumerate()
+            .find(|(_, v)| !v.iter().all(|c| c.is_finite()))
+        {
+            return Err(MeshDefect::NonFiniteVertex {
+                index,
+                value: *value,
+            });
+        }
+        let vertex_count = self.vertices.len();
+        for (triangle, tri) in self.triangles.iter().enumerate() {
+            if let Some(&vertex) = tri.iter().find(|&&i| i as usize >= vertex_count) {
+                return Err(MeshDefect::IndexOutOfRange {
+                    triangle,
+                    vertex,
+                    vertex_count,
+                });
+            }
+        }
+        let (min, max) = self.aabb();
+        let diagonal_sq: f64 = (0..3).map(|k| (max[k] - min[k]).powi(2)).sum();
+        let tolerance = ZERO_AREA_RELATIVE * diagonal_sq;
+        let all_zero = self.triangles.iter().all(|tri| {
+            let [a, b, c] = tri.map(|i| self.vertices[i as usize]);
+            let ab = sub(b, a);
+            let ac = sub(c, a);
+            norm(cross(ab, ac)) <= tolerance
+        });
+        if all_zero {
+            return Err(MeshDefect::Degenerate {
+                triangle_count: self.triangles.len(),
+            });
+        }
+        Ok(())
+    }
+
+    /// Axis-aligned bounding box `(min, max)` of all vertices.
+    ///
+    /// For a mesh without vertices, `min` is `+inf` and `max` is `-inf` in
+    /// every coordinate.
+    pub fn aabb(&self) -> ([f64; 3], [f64; 3]) {
+        let mut min = [f64::INFINITY; 3];
+        let mut max = [f64::NEG_INFINITY; 3];
+        for v in &self.vertices {
+            for k in 0..3 {
+                min[k] = min[k].min(v[k]);
+                max[k] = max[k].max(v[k]);
+            }
+        }
+        (min, max)
+    }
+
+    /// Converts the mesh into a parry triangle mesh.
+    ///
+    /// Identical vertex positions are merged and triangles made degenerate by
+    /// the merge are dropped. Pseudo-normals are computed so that, when the
+    /// mesh is closed and its triangles are counter-clockwise seen from
+    /// outside, `contains_point` and `project_point(.., solid = true)` tell
+    /// points inside the solid from points outside. For an open mesh those
+    /// answers are meaningless near the boundary; distance and intersection
+    /// queries work either way.
+    pub fn to_parry_trimesh(&self) -> Result<TriMesh, ShapeError> {
+        self.validate()?;
+        TriMesh::with_flags(self.parry_vertices(), self.triangles.clone(), TRIMESH_FLAGS)
+            .map_err(ShapeError::TriMesh)
+    }
+
+    /// The convex hull of all vertices, as a parry convex polyhedron.
+    ///
+    /// Returns `None` if the mesh fails [`MeshData::validate`] or parry cannot
+    /// build the hull. If all vertices are coplanar the hull is a flat
+    /// polygon (two-sided), which still works for distance and intersection
+    /// queries but has no inside.
+    pub fn to_convex_hull(&self) -> Option<SharedShape> {
+        self.validate().ok()?;
+        SharedShape::convex_hull(&self.parry_vertices())
+    }
+
+    /// An approximate convex decomposition of the mesh (V-HACD), as a parry
+    /// compound of convex polyhedra.
+    ///
+    /// The mesh should be closed: the voxelization flood-fills its inside. A
+    /// voxel grid of 32 cells along the longest side of the bounding box is
+    /// used, which keeps a mesh of a few thousand triangles in the
+    /// sub-second range; each part is the exact convex hull of the mesh
+    /// triangles falling into it, so parts hug the original surface rather
+    /// than the voxels.
+    pub fn to_convex_decomposition(&self) -> Result<SharedShape, ShapeError> {
+        self.validate()?;
+        let vertices = self.parry_vertices();
+        let params = VHACDParameters {
+            resolution: DECOMPOSITION_RESOLUTION,
+            ..VHACDParameters::default()
+        };
+        let decomposition = VHACD::decompose(&params, &vertices, &self.triangles, true);
+        let parts: Vec<(Pose, SharedShape)> = decomposition
+            .compute_exact_convex_hulls(&vertices, &self.triangles)
+            .into_iter()
+            .filter_map(|(points, indices)| SharedShape::convex_mesh(points, &indices))
+            .map(|part| (Pose::IDENTITY, part))
+            .collect();
+        if parts.is_empty() {
+            return Err(ShapeError::EmptyDecomposition);
+        }
+        // `SharedShape::compound` panics on an empty list, hence the check above.
+        Ok(SharedShape::compound(parts))
+    }
+
+    /// The vertices as parry vectors.
+    fn parry_vertices(&self) -> Vec<Vector> {
+        self.vertices
+            .iter()
+            .map(|&v| Vector::from_array(v))
+            .collect()
+    }
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn norm(a: [f64; 3]) -> f64 {
+    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
+}
+
+/// Loads a triangle mesh from an STL (binary or ASCII) or OBJ file.
+///
+/// The format is chosen by the file extension, case-insensitively: `.stl` or
+/// `.obj`. Binary and ASCII STL are told apart by content, not by the
+/// `solid` keyword alone (many binary files start their header with it).
+///
+/// * STL: vertices with bit-identical coordinates are shared between
+///   triangles. Coordinates are stored as `f32` in binary STL and parsed as
+///   `f32` from ASCII STL, then widened to `f64`.
+/// * OBJ: all objects and groups of the file are merged into one mesh;
+///   polygons are fan-triangulated (so they should be convex); point and line
+///   elements are ignored; material libraries are not read. A position used
+///   with different texture coordinates or normals becomes several vertices.
+///
+/// The result is checked with [`MeshData::validate`].
+pub fn load_mesh(path: &Path) -> Result<MeshData, MeshError> {
+    let extension = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    let parse: fn(&Path, &[u8]) -> Result<MeshData, MeshError> = match extension.as_deref() {
+        Some("stl") => parse_stl,
+        Some("obj") => parse_obj,
+        _ => {
+            return Err(MeshError::UnknownExtension {
+                path: path.to_path_buf(),
+                extension: path.extension().map(|e| e.to_string_lossy().into_owned()),
+            })
+        }
+    };
+    let bytes = std::fs::read(path).map_err(|error| MeshError::Io {
+        path: path.to_path_buf(),
+        error,
+    })?;
+    let mesh = parse(path, &bytes)?;
+    mesh.validate()
+        .map_err(|defect| MeshError::from_defect(path, defect))?;
+    Ok(mesh)
+}
+
+/// Size of the header (80 bytes) plus triangle count (4 bytes) of binary STL.
+const STL_BINARY_HEADER: usize = 84;
+/// Size of one triangle record of binary STL.
+const STL_BINARY_TRIANGLE: u64 = 50;
+
+/// Parses STL bytes, binary or ASCII.
+///
+/// `stl_io::read_stl` decides between ASCII and binary by checking whether
+/// the first line starts with `"solid "`. That misreads binary files whose
+/// header starts with "solid" (common) and ASCII files whose first line is a
+/// bare `solid`. The format is therefore decided here: a file whose size
+/// matches the triangle count of a binary header is binary; otherwise a text
+/// file (no NUL byte) starting with `solid` is ASCII; anything else is
+/// binary. The bytes handed to stl_io are adjusted so that it takes the same
+/// decision.
+fn parse_stl(path: &Path, bytes: &[u8]) -> Result<MeshData, MeshError> {
+    let parse_error = |format: &'static str, message: String| MeshError::Parse {
+        path: path.to_path_buf(),
+        format,
+        message,
+    };
+
+    let declared_triangles = bytes
+        .get(80..STL_BINARY_HEADER)
+        .map(|count| u32::from_le_bytes([count[0], count[1], count[2], count[3]]));
+    let binary_size =
+        declared_triangles.map(|n| STL_BINARY_HEADER as u64 + STL_BINARY_TRIANGLE * u64::from(n));
+    let exact_binary = binary_size == Some(bytes.len() as u64);
+    let solid_offset = solid_keyword_offset(bytes);
+
+    let (format, input): (&'static str, Cow<'_, [u8]>) =
+        if !exact_binary && solid_offset.is_some() && !bytes.contains(&0) {
+            // ASCII. Replace the first line by one stl_io accepts ("solid " + name).
+            let start = solid_offset.unwrap_or(0);
+            let rest = match bytes[start..].iter().position(|&b| b == b'\n') {
+                Some(newline) => &bytes[start + newline + 1..],
+                None => &[][..],
+            };
+            let mut normalised = b"solid mesh\n".to_vec();
+            normalised.extend_from_slice(rest);
+            ("ASCII STL", Cow::Owned(normalised))
+        } else {
+            let format = "binary STL";
+            let (Some(count), Some(expected)) = (declared_triangles, binary_size) else {
+                let message = if bytes.is_empty() {
+                    "the file is empty".to_string()
+                } else {
+                    format!(
+                        "the file has {} bytes, fewer than the {STL_BINARY_HEADER}-byte header \
+                         of a binary STL, and does not start with \"solid\" like an ASCII STL",
+                        bytes.len()
+                    )
+                };
+                return Err(parse_error(format, message));
+            };
+            if (bytes.len() as u64) < expected {
+                return Err(parse_error(
+                    format,
+                    format!(
+                        "the header declares {count} triangles, which need {expected} bytes, \
+                         but the file has only {} bytes",
+                        bytes.len()
+                    ),
+                ));
+            }
+            if bytes.starts_with(b"solid") {
+                // Blank the header so stl_io does not take it for ASCII.
+                let mut patched = bytes.to_vec();
+                patched[..80].fill(0);
+                (format, Cow::Owned(patched))
+            } else {
+                (format, Cow::Borrowed(bytes))
+            }
+        };
+
+    let indexed = stl_io::read_stl(&mut Cursor::new(input.as_ref()))
+        .map_err(|e| parse_error(format, e.to_string()))?;
+    let vertices = indexed
+        .vertices
+        .iter()
+        .map(|v| v.0.map(f64::from))
+        .collect();
+    let triangles = indexed
+        .faces
+        .iter()
+        .map(|face| {
+            let [a, b, c] = face.vertices;
+            match (u32::try_from(a), u32::try_from(b), u32::try_from(c)) {
+                (Ok(a), Ok(b), Ok(c)) => Ok([a, b, c]),
+                _ => Err(parse_error(
+                    format,
+                    "more than 2^32 distinct vertices".to_string(),
+                )),
+            }
+        })
+        .collect::<Result<_, _>>()?;
+    Ok(MeshData {
+        vertices,
+        triangles,
+    })
+}
+
+/// Offset of the `solid` keyword if the bytes (after an optional UTF-8 byte
+/// order mark and whitespace) start with it, case-insensitively.
+fn solid_keyword_offset(bytes: &[u8]) -> Option<usize> {
+    let bom = if bytes.starts_with(b"\xEF\xBB\xBF") {
+        3
+    } else {
+        0
+    };
+    let start = bom
+        + bytes[bom..]
+            .iter()
+            .position(|b| !b.is_ascii_whitespace())
+            .unwrap_or(bytes.len() - bom);
+    let word = bytes.get(start..start + 5)?;
+    let after = bytes.get(start + 5).copied();
+    (word.eq_ignore_ascii_case(b"solid") && after.is_none_or(|b| b.is_ascii_whitespace()))
+        .then_some(start)
+}
+
+/// Parses OBJ bytes with tobj, merging all models into one mesh.
+fn parse_obj(path: &Path, bytes: &[u8]) -> Result<MeshData, MeshError> {
+    let parse_error = |message: String| MeshError::Parse {
+        path: path.to_path_buf(),
+        format: "OBJ",
+        message,
+    };
+    // The struct update covers fields that only exist with tobj's optional
+    // `merging` and `reordering` features.
+    #[allow(clippy::needless_update)]
+    let options = tobj::LoadOptions {
+        triangulate: true,
+        single_index: true,
+        ignore_points: true,
+        ignore_lines: true,
+        ..Default::default()
+    };
+    // Material libraries are irrelevant for collision geometry: never read them.
+    let (models, _materials) =
+        tobj::load_obj_buf(
+            &mut Cursor::new(bytes),
+            &options,
+            |_| Ok(Default::default()),
+        )
+        .map_err(|e| {
+            parse_error(match e {
+                // Reading from memory only fails on bad UTF-8.
+                tobj::LoadError::ReadError => "the file is not valid UTF-8 text".to_string(),
+                other => other.to_string(),
+            })
+        })?;
+
+    let mut mesh = MeshData::default();
+    for model in &models {
+        let base = u32::try_from(mesh.vertices.len())
+            .map_err(|_| parse_error("more than 2^32 vertices".to_string()))?;
+        let positions = &model.mesh.positions;
+        if positions.len() % 3 != 0 || model.mesh.indices.len() % 3 != 0 {
+            return Err(parse_error(format!(
+                "object \"{}\" has a position or index count that is not a multiple of 3",
+                model.name
+            )));
+        }
+        mesh.vertices.extend(
+            positions
+                .chunks_exact(3)
+                .map(|p| [obj_float(p[0]), obj_float(p[1]), obj_float(p[2])]),
+        );
+        for tri in model.mesh.indices.chunks_exact(3) {
+            let shifted = [tri[0], tri[1], tri[2]].map(|i| base.checked_add(i));
+            let [Some(a), Some(b), Some(c)] = shifted else {
+                return Err(parse_error("more than 2^32 vertices".to_string()));
+            };
+            mesh.triangles.push([a, b, c]);
+        }
+    }
+    Ok(mesh)
+}
+
+/// Widens a tobj coordinate to `f64` (tobj parses `f64` with its `use_f64`
+/// feature and `f32` without; this works with either).
+fn obj_float(x: impl Into<f64>) -> f64 {
+    x.into()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use parry3d_f64::query::PointQuery;
+    use std::collections::HashMap;
+    use std::time::Instant;
+
+    fn p(x: f64, y: f64, z: f64) -> Vector {
+        Vector::new(x, y, z)
+    }
+
+    /// Extrudes a counter-clockwise polygon of the `(x, z)` plane along `+y`
+    /// by `depth`; `caps` triangulates the polygon (counter-clockwise too).
+    fn extrude(profile: &[[f64; 2]], caps: &[[u32; 3]], depth: f64) -> MeshData {
+        let n = profile.len() as u32;
+        let mut vertices: Vec<[f64; 3]> = profile.iter().map(|q| [q[0], 0.0, q[1]]).collect();
+        vertices.extend(profile.iter().map(|q| [q[0], depth, q[1]]));
+        // Counter-clockwise in (x, z) faces -y: right for the front cap.
+        let mut triangles: Vec<[u32; 3]> = caps.to_vec();
+        triangles.extend(caps.iter().map(|&[a, b, c]| [a + n, c + n, b + n]));
+        for i in 0..n {
+            let j = (i + 1) % n;
+            triangles.push([i, i + n, j + n]);
+            triangles.push([i, j + n, j]);
+        }
+        MeshData {
+            vertices,
+            triangles,
+        }
+    }
+
+    /// The unit cube [0, 1]^3.
+    fn cube() -> MeshData {
+        extrude(
+            &[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]],
+            &[[0, 1, 2], [0, 2, 3]],
+            1.0,
+        )
+    }
+
+    /// A U: a 3 × 1 bar (z in [0, 1]) with two 1-wide pillars up to z = 3,
+    /// extruded 1 along y; the notch is x in [1, 2], z in [1, 3].
+    fn u_shape() -> MeshData {
+        extrude(
+            &[
+                [0.0, 0.0],
+                [3.0, 0.0],
+                [3.0, 3.0],
+                [2.0, 3.0],
+                [2.0, 1.0],
+                [1.0, 1.0],
+                [1.0, 3.0],
+                [0.0, 3.0],
+            ],
+            &[
+                [0, 1, 4],
+                [1, 2, 4],
+                [2, 3, 4],
+                [0, 4, 5],
+                [0, 5, 6],
+                [0, 6, 7],
+            ],
+            1.0,
+        )
+    }
+
+    /// The same surface with every triangle given its own three vertices.
+    fn soup(mesh: &MeshData) -> MeshData {
+        let mut out = MeshData::default();
+        for tri in &mesh.triangles {
+            let base = out.vertices.len() as u32;
+            out.vertices
+                .extend(tri.iter().map(|&i| mesh.vertices[i as usize]));
+            out.triangles.push([base, base + 1, base + 2]);
+        }
+        out
+    }
+
+    fn signed_volume(mesh: &MeshData) -> f64 {
+        mesh.triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
+                a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+                    + a[2] * (b[0] * c[1] - b[1] * c[0])
+            })
+            .sum::<f64>()
+            / 6.0
+    }
+
+    /// Checks that every directed edge appears exactly once and its reverse
+    /// exactly once: the surface is closed and consistently oriented.
+    fn assert_closed_and_oriented(name: &str, mesh: &MeshData) {
+        let mut directed: HashMap<(u32, u32), usize> = HashMap::new();
+        for t in &mesh.triangles {
+            for k in 0..3 {
+                *directed.entry((t[k], t[(k + 1) % 3])).or_default() += 1;
+            }
+        }
+        for (&(a, b), &count) in &directed {
+            assert_eq!(count, 1, "{name}: edge {a}->{b} appears {count} times");
+            assert_eq!(
+                directed.get(&(b, a)),
+                Some(&1),
+                "{name}: edge {a}->{b} has no matching opposite edge"
+            );
+        }
+    }
+
+    fn binary_stl_bytes(mesh: &MeshData, header: &[u8]) -> Vec<u8> {
+        let mut bytes = header.to_vec();
+        bytes.resize(80, b' ');
+        bytes.extend_from_slice(&(mesh.triangles.len() as u32).to_le_bytes());
+        for tri in &mesh.triangles {
+            bytes.extend_from_slice(&[0u8; 12]);
+            for &i in tri {
+                for c in mesh.vertices[i as usize] {
+                    bytes.extend_from_slice(&(c as f32).to_le_bytes());
+                }
+            }
+            bytes.extend_from_slice(&[0u8; 2]);
+        }
+        bytes
+    }
+
+    fn write(dir: &tempfile::TempDir, name: &str, contents: &[u8]) -> PathBuf {
+        let path = dir.path().join(name);
+        std::fs::write(&path, contents).unwrap();
+        path
+    }
+
+    fn load_err(path: &Path) -> String {
+        let err = load_mesh(path).expect_err("loading should fail");
+        assert_eq!(err.path(), path);
+        let message = err.to_string();
+        assert!(
+            message.starts_with(&format!("{}: ", path.display())),
+            "message does not start with the path: {message}"
+        );
+        message
+    }
+
+    const TETRA_ASCII: &str = "solid tetra
+  facet normal 0 0 -1
+    outer loop
+      vertex 0 0 0
+      vertex 0 1 0
+      vertex 1 0 0
+    endloop
+  endfacet
+  facet normal 0 -1 0
+    outer loop
+      vertex 0 0 0
+      vertex 1 0 0
+      vertex 0 0 1.25
+    endloop
+  endfacet
+  facet normal -1 0 0
+    outer loop
+      vertex 0 0 0
+      vertex 0 0 1.25
+      vertex 0 1 0
+    endloop
+  endfacet
+  facet normal 0.577 0.577 0.577
+    outer loop
+      vertex 1 0 0
+      vertex 0 1 0
+      vertex 0 0 1.25
+    endloop
+  endfacet
+endsolid tetra
+";
+
+    #[test]
+    fn loads_binary_stl() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut cube = cube();
+        cube.vertices[6] = [1.0, 1.0, 1.5];
+        let path = write(&dir, "cube.stl", &stl_io_bytes(&cube));
+        let mesh = load_mesh(&path).unwrap();
+        assert_eq!(mesh.triangles.len(), 12);
+        assert_eq!(mesh.vertices.len(), 8);
+        assert!(mesh.vertices.contains(&[1.0, 1.0, 1.5]));
+        assert!(mesh.vertices.contains(&[0.0, 1.0, 0.0]));
+        assert_closed_and_oriented("cube.stl", &mesh);
+        assert!(signed_volume(&mesh) > 1.0);
+        assert_eq!(mesh.aabb(), ([0.0, 0.0, 0.0], [1.0, 1.0, 1.5]));
+    }
+
+    /// Binary STL written by stl_io's own writer.
+    fn stl_io_bytes(mesh: &MeshData) -> Vec<u8> {
+        let triangles: Vec<stl_io::Triangle> = mesh
+            .triangles
+            .iter()
+            .map(|t| stl_io::Triangle {
+                normal: stl_io::Normal::new([0.0; 3]),
+                vertices: t
+                    .map(|i| stl_io::Vertex::new(mesh.vertices[i as usize].map(|c| c as f32))),
+            })
+            .collect();
+        let mut bytes = Vec::new();
+        stl_io::write_stl(&mut bytes, triangles.iter()).unwrap();
+        bytes
+    }
+
+    #[test]
+    fn loads_binary_stl_whose_header_starts_with_solid() {
+        // Many exporters start the binary header with "solid"; stl_io alone
+        // would parse such a file as ASCII and fail.
+        let dir = tempfile::tempdir().unwrap();
+        let bytes = binary_stl_bytes(&cube(), b"solid cube exported by some CAD tool");
+        let path = write(&dir, "cube.STL", &bytes);
+        let mesh = load_mesh(&path).unwrap();
+        assert_eq!((mesh.vertices.len(), mesh.triangles.len()), (8, 12));
+        assert_closed_and_oriented("cube.STL", &mesh);
+    }
+
+    #[test]
+    fn loads_ascii_stl() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = write(&dir, "tetra.stl", TETRA_ASCII.as_bytes());
+        let mesh = load_mesh(&path).unwrap();
+        assert_eq!(mesh.triangles.len(), 4);
+        assert_eq!(mesh.vertices.len(), 4);
+        assert_eq!(
+            mesh.vertices,
+            vec![
+                [0.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 0.0, 1.25]
+            ]
+        );
+        assert_eq!(mesh.triangles[0], [0, 1, 2]);
+        assert_closed_and_oriented("tetra.stl", &mesh);
+        assert!((signed_volume(&mesh) - 1.25 / 6.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn loads_ascii_stl_with_bare_solid_line_and_crlf() {
+        // stl_io alone requires the first line to start with "solid ".
+        let dir = tempfile::tempdir().unwrap();
+        let text = TETRA_ASCII
+            .replacen("solid tetra", "\u{feff}  solid", 1)
+            .replace('\n', "\r\n");
+        let path = write(&dir, "tetra.stl", text.as_bytes());
+        let mesh = load_mesh(&path).unwrap();
+        assert_eq!((mesh.vertices.len(), mesh.triangles.len()), (4, 4));
+    }
+
+    #[test]
+    fn loads_obj_merging_objects_and_triangulating() {
+        let dir = tempfile::tempdir().unwrap();
+        let text = "# two objects
+mtllib does_not_exist.mtl
+o first
+v 0 0 0
+v 1 0 0
+v 1 1 0
+v 0 1 0
+vn 0 0 1
+f 1//1 2//1 3//1 4//1
+o second
+v 0 0 2
+v 1 0 2.5
+v 0 1 2
+l 5 6
+f -3 -2 -1
+";
+        let path = write(&dir, "parts.OBJ", text.as_bytes());
+        let mesh = load_mesh(&path).unwrap();
+        // The quad becomes two triangles; the line element is ignored.
+        assert_eq!(mesh.triangles.len(), 3);
+        assert_eq!(mesh.vertices.len(), 7);
+        assert_eq!(mesh.triangles[0], [0, 1, 2]);
+        assert_eq!(mesh.triangles[1], [0, 2, 3]);
+        assert_eq!(mesh.triangles[2], [4, 5, 6]);
+        assert_eq!(mesh.vertices[2], [1.0, 1.0, 0.0]);
+        assert_eq!(mesh.vertices[5], [1.0, 0.0, 2.5]);
+    }
+
+    #[test]
+    fn obj_coordinates_keep_f64_precision() {
+        let dir = tempfile::tempdir().unwrap();
+        let text = "v 0.1 0.2 0.3\nv 1.000000001 0 0\nv 0 1 0\nf 1 2 3\n";
+        let path = write(&dir, "precise.obj", text.as_bytes());
+        let mesh = load_mesh(&path).unwrap();
+        assert_eq!(mesh.vertices[0], [0.1, 0.2, 0.3]);
+        assert_eq!(mesh.vertices[1][0], 1.000000001);
+    }
+
+    #[test]
+    fn error_missing_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("missing.stl");
+        let message = load_err(&path);
+        assert!(message.contains("cannot read file"), "{message}");
+        assert!(matches!(
+            load_mesh(&path),
+            Err(MeshError::Io { error, .. }) if error.kind() == std::io::ErrorKind::NotFound
+        ));
+    }
+
+    #[test]
+    fn error_unknown_extension() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = write(&dir, "model.ply", b"ply\n");
+        let message = load_err(&path);
+        assert!(
+            message.ends_with(
+                "unsupported mesh format: file extension \".ply\" (expected .stl or .obj)"
+            ),
+            "{message}"
+        );
+        let path = write(&dir, "model", b"");
+        let message = load_err(&path);
+        assert!(message.contains("no file extension"), "{message}");
+    }
+
+    #[test]
+    fn error_unparseable_files() {
+        let dir = tempfile::tempdir().unwrap();
+
+        let text = TETRA_ASCII.replacen("vertex 0 1 0", "vertex 0 one 0", 1);
+        let path = write(&dir, "bad_ascii.stl", text.as_bytes());
+        let message = load_err(&path);
+        assert!(message.contains("cannot parse as ASCII STL"), "{message}");
+
+        let mut bytes = binary_stl_bytes(&cube(), b"");
+        bytes.truncate(bytes.len() - 30);
+        let path = write(&dir, "truncated.stl", &bytes);
+        let message = load_err(&path);
+        assert!(
+            message.contains("cannot parse as binary STL: the header declares 12 triangles"),
+            "{message}"
+        );
+
+        let path = write(&dir, "short.stl", b"not a mesh");
+        let message = load_err(&path);
+        assert!(
+            message.contains("fewer than the 84-byte header"),
+            "{message}"
+        );
+
+        let path = write(&dir, "empty.stl", b"");
+        let message = load_err(&path);
+        assert!(message.contains("the file is empty"), "{message}");
+
+        let path = write(
+            &dir,
+            "bad_face.obj",
+            b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n",
+        );
+        let message = load_err(&path);
+        assert!(
+            message.contains("cannot parse as OBJ: face vertex index out of bounds"),
+            "{message}"
+        );
+
+        let path = write(&dir, "binary.obj", b"v 0 0 0\n\xff\xfe\n");
+        let message = load_err(&path);
+        assert!(message.contains("not valid UTF-8"), "{message}");
+    }
+
+    #[test]
+    fn error_empty_mesh() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = write(&dir, "nothing.stl", b"solid nothing\nendsolid nothing\n");
+        assert_eq!(
+            load_err(&path),
+            format!("{}: mesh has no triangles", path.display())
+        );
+        let path = write(&dir, "points.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\n");
+        assert!(load_err(&path).ends_with("mesh has no triangles"));
+        let path = write(
+            &dir,
+            "zero.stl",
+            &binary_stl_bytes(&MeshData::default(), b""),
+        );
+        assert!(matches!(load_mesh(&path), Err(MeshError::Empty { .. })));
+    }
+
+    #[test]
+    fn error_non_finite_vertex() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut mesh = cube();
+        mesh.vertices[3] = [f64::NAN, 0.0, 1.0];
+        let path = write(&dir, "nan.stl", &binary_stl_bytes(&mesh, b""));
+        let message = load_err(&path);
+        assert!(
+            message.contains("vertex 3 is not finite: [NaN, 0, 1]"),
+            "{message}"
+        );
+
+        let path = write(&dir, "inf.obj", b"v 0 0 0\nv 1 inf 0\nv 0 1 0\nf 1 2 3\n");
+        assert_eq!(
+            load_err(&path),
+            format!("{}: vertex 1 is not finite: [1, inf, 0]", path.display())
+        );
+    }
+
+    #[test]
+    fn error_index_out_of_range() {
+        // Both loaders reject such files themselves (tobj as a parse error,
+        // stl_io cannot produce them), so check the validation directly.
+        let mut mesh = cube();
+        mesh.triangles[5] = [0, 1, 8];
+        let defect = mesh.validate().unwrap_err();
+        assert_eq!(
+            defect.to_string(),
+            "triangle 5 refers to vertex 8, but the mesh has only 8 vertices"
+        );
+        let path = Path::new("meshes/broken.obj");
+        let message = MeshError::from_defect(path, defect).to_string();
+        assert_eq!(
+            message,
+            "meshes/broken.obj: triangle 5 refers to vertex 8, but the mesh has only 8 vertices"
+        );
+        assert!(matches!(
+            mesh.to_parry_trimesh(),
+            Err(ShapeError::InvalidMesh(MeshDefect::IndexOutOfRange { .. }))
+        ));
+    }
+
+    #[test]
+    fn error_degenerate_mesh() {
+        let dir = tempfile::tempdir().unwrap();
+        let text = "v 0 0 0\nv 1 1 1\nv 2 2 2\nv 3 3 3\nf 1 2 3\nf 1 3 4\nf 2 2 4\n";
+        let path = write(&dir, "flat.obj", text.as_bytes());
+        assert_eq!(
+            load_err(&path),
+            format!(
+                "{}: mesh is degenerate: all 3 triangles have zero area",
+                path.display()
+            )
+        );
+    }
+
+    #[test]
+    fn non_finite_reported_before_degeneracy() {
+        let mut mesh = cube();
+        mesh.vertices[7][2] = f64::INFINITY;
+        assert_eq!(
+            mesh.validate(),
+            Err(MeshDefect::NonFiniteVertex {
+                index: 7,
+                value: [0.0, 1.0, f64::INFINITY]
+            })
+        );
+    }
+
+    #[test]
+    fn test_shapes_are_closed_and_outward() {
+        for (name, mesh, volume) in [("cube", cube(), 1.0), ("U", u_shape(), 7.0)] {
+            assert_closed_and_oriented(name, &mesh);
+            assert!((signed_volume(&mesh) - volume).abs() < 1e-12, "{name}");
+            mesh.validate().unwrap();
+        }
+    }
+
+    #[test]
+    fn trimesh_tells_inside_from_outside_on_cube() {
+        for mesh in [cube(), soup(&cube())] {
+            let trimesh = mesh.to_parry_trimesh().unwrap();
+            let id = Pose::IDENTITY;
+            let inside = [p(0.5, 0.5, 0.5), p(0.99, 0.99, 0.99), p(0.01, 0.5, 0.99)];
+            let outside = [
+                p(1.5, 0.5, 0.5),
+                p(1.1, 1.1, 1.1),
+                p(-0.1, -0.1, 0.5),
+                p(0.5, 0.5, -0.01),
+            ];
+            for q in inside {
+                assert!(trimesh.contains_point(&id, q), "{q:?} should be inside");
+                assert!(trimesh.project_point(&id, q, true).is_inside, "{q:?}");
+                assert!(trimesh.project_point(&id, q, false).is_inside, "{q:?}");
+            }
+            for q in outside {
+                assert!(!trimesh.contains_point(&id, q), "{q:?} should be outside");
+                assert!(!trimesh.project_point(&id, q, true).is_inside, "{q:?}");
+            }
+        }
+    }
+
+    /// A thin wedge: right triangle with legs 1 (x) and 0.2 (z), extruded 1
+    /// along y; its edge along y at x = 1 is sharp (about 11°).
+    fn wedge() -> MeshData {
+        extrude(&[[0.0, 0.0], [1.0, 0.0], [0.0, 0.2]], &[[0, 1, 2]], 1.0)
+    }
+
+    #[test]
+    fn trimesh_of_triangle_soup_classifies_points_near_a_sharp_edge() {
+        let wedge = wedge();
+        assert_closed_and_oriented("wedge", &wedge);
+        let trimesh = soup(&wedge).to_parry_trimesh().unwrap();
+        let id = Pose::IDENTITY;
+        for y in [-0.03, 0.1, 0.5, 0.9, 1.03] {
+            for degrees in (-88..=10).step_by(7) {
+                let (s, c) = f64::from(degrees).to_radians().sin_cos();
+                // Just outside the sharp edge (or its end corners).
+                let q = p(1.0 + 0.05 * c, y, 0.05 * s);
+                assert!(!trimesh.contains_point(&id, q), "{q:?} should be outside");
+            }
+        }
+        for q in [p(0.95, 0.5, 0.005), p(0.9, 0.01, 0.01), p(0.02, 0.98, 0.19)] {
+            assert!(trimesh.contains_point(&id, q), "{q:?} should be inside");
+        }
+    }
+
+    #[test]
+    fn trimesh_without_orientation_flag_has_no_inside() {
+        // Documents why `ORIENTED` is needed.
+        let mesh = cube();
+        let plain = TriMesh::new(mesh.parry_vertices(), mesh.triangles.clone()).unwrap();
+        assert!(!plain.contains_point(&Pose::IDENTITY, p(0.5, 0.5, 0.5)));
+    }
+
+    #[test]
+    fn shapes_of_u_shape() {
+        let mesh = u_shape();
+        let id = Pose::IDENTITY;
+        let notch = p(1.5, 0.5, 2.0);
+        let bar = p(1.5, 0.5, 0.5);
+        let pillar = p(0.5, 0.5, 2.5);
+        let far = p(1.5, 3.0, 2.0);
+
+        let trimesh = mesh.to_parry_trimesh().unwrap();
+        assert!(trimesh.contains_point(&id, bar));
+        assert!(trimesh.contains_point(&id, pillar));
+        assert!(!trimesh.contains_point(&id, notch));
+        assert!(!trimesh.contains_point(&id, far));
+
+        let hull = mesh.to_convex_hull().unwrap();
+        assert!(hull.contains_point(&id, bar));
+        assert!(hull.contains_point(&id, notch));
+        assert!(!hull.contains_point(&id, far));
+
+        let start = Instant::now();
+        let decomposition = mesh.to_convex_decomposition().unwrap();
+        let elapsed = start.elapsed();
+        let parts = decomposition.as_compound().unwrap().shapes().len();
+        assert!(
+            parts >= 2,
+            "a U needs at least two convex parts, got {parts}"
+        );
+        assert!(decomposition.contains_point(&id, bar));
+        assert!(decomposition.contains_point(&id, pillar));
+        assert!(!decomposition.contains_point(&id, notch));
+        assert!(!decomposition.contains_point(&id, far));
+        eprintln!("U-shape decomposition: {parts} parts in {elapsed:?}");
+    }
+
+    #[test]
+    fn shapes_of_cube() {
+        let mesh = cube();
+        let id = Pose::IDENTITY;
+        let hull = mesh.to_convex_hull().unwrap();
+        let decomposition = mesh.to_convex_decomposition().unwrap();
+        for shape in [&hull, &decomposition] {
+            assert!(shape.contains_point(&id, p(0.5, 0.5, 0.5)));
+            assert!(shape.contains_point(&id, p(0.95, 0.05, 0.95)));
+            assert!(!shape.contains_point(&id, p(1.05, 0.5, 0.5)));
+            assert!(!shape.contains_point(&id, p(0.5, 0.5, -0.05)));
+        }
+        let (min, max) = ([0.0; 3], [1.0; 3]);
+        let aabb = decomposition.compute_local_aabb();
+        for k in 0..3 {
+            assert!((aabb.mins[k] - min[k]).abs() < 1e-9);
+            assert!((aabb.maxs[k] - max[k]).abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn shapes_of_invalid_or_flat_meshes() {
+        let empty = MeshData::default();
+        assert_eq!(
+            empty.to_parry_trimesh().unwrap_err(),
+            ShapeError::InvalidMesh(MeshDefect::Empty)
+        );
+        assert_eq!(
+            empty.to_convex_decomposition().unwrap_err(),
+            ShapeError::InvalidMesh(MeshDefect::Empty)
+        );
+        assert!(empty.to_convex_hull().is_none());
+        assert_eq!(empty.aabb().0, [f64::INFINITY; 3]);
+
+        let square = MeshData {
+            vertices: vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [1.0, 1.0, 0.0],
+                [0.0, 1.0, 0.0],
+            ],
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+        };
+        let flat_hull = square.to_convex_hull().unwrap();
+        let above = flat_hull.project_point(&Pose::IDENTITY, p(0.5, 0.5, 0.25), true);
+        assert!((above.point - p(0.5, 0.5, 0.0)).length() < 1e-12);
+        assert!(square.to_parry_trimesh().is_ok());
+        // Flat: no volume to decompose; must not panic.
+        let flat = square.to_convex_decomposition();
+        assert!(matches!(flat, Ok(_) | Err(ShapeError::EmptyDecomposition)));
+
+        let mut nan = cube();
+        nan.vertices[0][0] = f64::NAN;
+        assert!(nan.to_convex_hull().is_none());
+    }
+
+    fn committed(name: &str) -> MeshData {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("meshes")
+            .join(name);
+        load_mesh(&path).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    fn assert_extent(name: &str, mesh: &MeshData, expected: [f64; 3]) {
+        let (min, max) = mesh.aabb();
+        for k in 0..3 {
+            let extent = max[k] - min[k];
+            assert!(
+                (extent - expected[k]).abs() < 1e-6,
+                "{name}: extent {k} is {extent}, expected {}",
+                expected[k]
+            );
+        }
+    }
+
+    #[test]
+    fn committed_meshes_are_closed_outward_and_small() {
+        for (name, extent) in [
+            ("glovebox.stl", [1.0, 0.6, 0.7]),
+            ("pipe_bundle.obj", [1.0, 0.9, 0.29]),
+            ("vessel.stl", [0.75, 0.6, 0.8]),
+        ] {
+            let mesh = committed(name);
+            assert!(mesh.triangles.len() <= 3000, "{name}: too many triangles");
+            assert_closed_and_oriented(name, &mesh);
+            assert!(signed_volume(&mesh) > 0.0, "{name}: not outward");
+            assert_extent(name, &mesh, extent);
+        }
+    }
+
+    #[test]
+    fn committed_glovebox_is_a_hollow_shell_with_ports() {
+        let mesh = committed("glovebox.stl");
+        assert!((signed_volume(&mesh) - 0.0639).abs() < 1e-3);
+        let trimesh = mesh.to_parry_trimesh().unwrap();
+        let id = Pose::IDENTITY;
+        // Inside the front wall, inside the back wall, in the cavity, in a
+        // glove port, outside.
+        assert!(trimesh.contains_point(&id, p(0.0, -0.29, 0.1)));
+        assert!(trimesh.contains_point(&id, p(0.3, 0.29, 0.6)));
+        assert!(!trimesh.contains_point(&id, p(0.0, 0.0, 0.35)));
+        assert!(!trimesh.contains_point(&id, p(-0.25, -0.29, 0.35)));
+        assert!(!trimesh.contains_point(&id, p(0.25, -0.29, 0.42)));
+        assert!(trimesh.contains_point(&id, p(0.25, -0.29, 0.46)));
+        assert!(!trimesh.contains_point(&id, p(0.0, -0.4, 0.35)));
+    }
+
+    #[test]
+    fn committed_pipes_and_vessel_contain_their_interiors() {
+        let id = Pose::IDENTITY;
+        let pipes = committed("pipe_bundle.obj").to_parry_trimesh().unwrap();
+        assert!(pipes.contains_point(&id, p(0.0, 0.0, 0.5)));
+        assert!(pipes.contains_point(&id, p(0.49, 0.32, 0.5)));
+        assert!(!pipes.contains_point(&id, p(0.0, 0.08, 0.5)));
+        assert!(pipes.contains_point(&id, p(0.2, 0.0, 0.64)));
+        assert!(!pipes.contains_point(&id, p(0.0, 0.0, 0.64)));
+
+        let vessel = committed("vessel.stl").to_parry_trimesh().unwrap();
+        assert!(vessel.contains_point(&id, p(0.0, 0.0, 0.4)));
+        assert!(vessel.contains_point(&id, p(0.0, 0.0, 0.79)));
+        assert!(vessel.contains_point(&id, p(0.29, 0.0, 0.25)));
+        assert!(vessel.contains_point(&id, p(0.38, 0.0, 0.25)));
+        assert!(vessel.contains_point(&id, p(0.44, 0.09, 0.25)));
+        assert!(!vessel.contains_point(&id, p(0.38, 0.07, 0.25)));
+        assert!(!vessel.contains_point(&id, p(0.25, 0.25, 0.75)));
+    }
+
+    #[test]
+    fn committed_vessel_decomposes() {
+        let mesh = committed("vessel.stl");
+        let start = Instant::now();
+        let decomposition = mesh.to_convex_decomposition().unwrap();
+        let elapsed = start.elapsed();
+        let id = Pose::IDENTITY;
+        assert!(decomposition.contains_point(&id, p(0.0, 0.0, 0.4)));
+        assert!(decomposition.contains_point(&id, p(0.38, 0.0, 0.25)));
+        assert!(!decomposition.contains_point(&id, p(0.0, 0.0, 0.9)));
+        let parts = decomposition.as_compound().unwrap().shapes().len();
+        eprintln!("vessel decomposition: {parts} parts in {elapsed:?}");
+    }
+}
