@@ -61,6 +61,15 @@ pub enum Error {
         /// Name (or shape) of the obstacle.
         name: String,
     },
+    /// A mesh file referenced by a field could not be used.
+    #[error("{field}: {source}")]
+    Mesh {
+        /// Field path, e.g. `obstacle[2].file`.
+        field: String,
+        /// What is wrong with the mesh (names the mesh file).
+        #[source]
+        source: crate::world::mesh::MeshError,
+    },
     /// An error found while processing a particular file.
     #[error("{}: {source}", file.display())]
     InFile {

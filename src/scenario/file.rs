@@ -175,6 +175,29 @@ pub enum ShapeKind {
     Cuboid,
     /// Needs `radius` and `length` (along local z).
     Cylinder,
+    /// Needs `file` (STL or OBJ, relative to the scenario file); optional `representation`
+    /// and `scale`.
+    Mesh,
+}
+
+/// A scale: one factor for all axes, or `[sx, sy, sz]`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum ScaleSpec {
+    /// The same factor on every axis.
+    Uniform(f64),
+    /// One factor per axis.
+    PerAxis([f64; 3]),
+}
+
+impl ScaleSpec {
+    /// The three factors.
+    pub fn factors(&self) -> [f64; 3] {
+        match *self {
+            ScaleSpec::Uniform(s) => [s; 3],
+            ScaleSpec::PerAxis(v) => v,
+        }
+    }
 }
 
 /// One `[[obstacle]]` entry.
@@ -188,9 +211,12 @@ pub struct ObstacleSpec {
     pub shape: ShapeKind,
     /// Position of the shape's centre.
     pub position: [f64; 3],
-    /// Orientation (roll, pitch, yaw). Default 0.
+    /// Orientation as roll, pitch, yaw (fixed axes x, y, z, as URDF). Default 0.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rpy: Option<[f64; 3]>,
+    /// Orientation as a unit quaternion `[x, y, z, w]` (ROS order), instead of `rpy`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub quaternion: Option<[f64; 4]>,
     /// Radius (sphere, capsule, cylinder).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub radius: Option<f64>,
@@ -200,6 +226,15 @@ pub struct ObstacleSpec {
     /// Full side lengths (cuboid).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub size: Option<[f64; 3]>,
+    /// Mesh file, relative to the scenario file (mesh).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub file: Option<String>,
+    /// `hull`, `decomposition` or `trimesh` (mesh). Default `hull`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub representation: Option<crate::world::MeshRepresentation>,
+    /// Scale of the mesh in its own frame (mesh). Default 1.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scale: Option<ScaleSpec>,
 }
 
 /// One `[[task]]` entry.

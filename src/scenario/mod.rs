@@ -49,6 +49,10 @@ fn at(prefix: &str) -> impl Fn(Error) -> Error + '_ {
             value,
             reason,
         },
+        Error::Mesh { field, source } => Error::Mesh {
+            field: format!("{prefix}.{field}"),
+            source,
+        },
         other => other,
     }
 }
@@ -95,7 +99,8 @@ impl Scenario {
             source,
         })?;
         let spec = Self::parse(&text).map_err(|e| e.in_file(path))?;
-        let mut s = Scenario::from_spec(&spec).map_err(|e| e.in_file(path))?;
+        let dir = path.parent().unwrap_or(Path::new(""));
+        let mut s = Scenario::from_spec_in(&spec, dir).map_err(|e| e.in_file(path))?;
         if spec.name.is_none() {
             if let Some(stem) = path.file_stem() {
                 s.name = stem.to_string_lossy().into_owned();
@@ -132,10 +137,16 @@ impl Scenario {
             .map_err(|e| describe(Some(e.path().to_string()), e.inner()))
     }
 
-    /// Validates a raw scenario and builds the design space and workspace.
+    /// Validates a raw scenario and builds the design space and workspace; mesh files are
+    /// looked up relative to the current directory.
     pub fn from_spec(spec: &ScenarioSpec) -> Result<Scenario> {
+        Self::from_spec_in(spec, Path::new(""))
+    }
+
+    /// As [`Scenario::from_spec`], with mesh files relative to `dir` (the scenario's folder).
+    pub fn from_spec_in(spec: &ScenarioSpec, dir: &Path) -> Result<Scenario> {
         let space = Self::design_space(spec)?;
-        let workspace = Self::workspace(spec)?;
+        let workspace = Self::workspace(spec, dir)?;
         let p = &spec.planner;
         check(
             p.l_max.is_finite() && p.l_max > 0.0,
@@ -364,7 +375,7 @@ impl Scenario {
         DesignSpace::new(template, space.variables().to_vec(), r.snap)
     }
 
-    fn workspace(spec: &ScenarioSpec) -> Result<Workspace> {
+    fn workspace(spec: &ScenarioSpec, dir: &Path) -> Result<Workspace> {
         check(
             spec.clearance.is_finite() && spec.clearance >= 0.0,
             "clearance",
@@ -373,7 +384,7 @@ impl Scenario {
         )?;
         let mut obstacles = Vec::with_capacity(spec.obstacle.len());
         for (k, o) in spec.obstacle.iter().enumerate() {
-            obstacles.push(Self::obstacle(k, o)?);
+            obstacles.push(Self::obstacle(k, o, dir)?);
         }
         let mut tasks = Vec::with_capacity(spec.task.len());
         for (j, t) in spec.task.iter().enumerate() {
@@ -388,7 +399,7 @@ impl Scenario {
         Workspace::new(obstacles, tasks, spec.clearance)
     }
 
-    fn obstacle(k: usize, o: &ObstacleSpec) -> Result<Obstacle> {
+    fn obstacle(k: usize, o: &ObstacleSpec, dir: &Path) -> Result<Obstacle> {
         let prefix = format!("obstacle[{k}]");
         let field = |f: &str| format!("{prefix}.{f}");
         check(
@@ -409,6 +420,7 @@ impl Scenario {
             ShapeKind::Capsule => "capsule",
             ShapeKind::Cuboid => "cuboid",
             ShapeKind::Cylinder => "cylinder",
+            ShapeKind::Mesh => "mesh",
         };
         let need = |v: Option<f64>, f: &str| {
             v.ok_or_else(|| Error::invalid(field(f), "missing", format!("a {kind} needs `{f}`")))
@@ -421,7 +433,25 @@ impl Scenario {
                 &format!("a {kind} has no `{f}`"),
             )
         };
+        if o.shape != ShapeKind::Mesh {
+            unused(o.file.is_some(), "file")?;
+            unused(o.representation.is_some(), "representation")?;
+            unused(o.scale.is_some(), "scale")?;
+        }
         let geometry = match o.shape {
+            ShapeKind::Mesh => {
+                unused(o.radius.is_some(), "radius")?;
+                unused(o.length.is_some(), "length")?;
+                unused(o.size.is_some(), "size")?;
+                let file = o.file.as_ref().ok_or_else(|| {
+                    Error::invalid(field("file"), "missing", "a mesh needs `file`")
+                })?;
+                ObstacleShape::Mesh {
+                    file: dir.join(file),
+                    representation: o.representation.unwrap_or_default(),
+                    scale: o.scale.map_or([1.0; 3], |s| s.factors()),
+                }
+            }
             ShapeKind::Sphere => {
                 unused(o.length.is_some(), "length")?;
                 unused(o.size.is_some(), "size")?;
@@ -449,12 +479,32 @@ impl Scenario {
                 }
             }
         };
-        let placement = Placement {
+        let mut placement = Placement {
             position: o.position,
             rpy,
-        };
+        }
+        .isometry();
+        if let Some(q) = o.quaternion {
+            check(
+                o.rpy.is_none(),
+                field("quaternion"),
+                format!("{q:?}"),
+                "give either `rpy` or `quaternion`, not both",
+            )?;
+            let n = q.iter().map(|v| v * v).sum::<f64>().sqrt();
+            check(
+                q.iter().all(|v| v.is_finite()) && n > 1e-9,
+                field("quaternion"),
+                format!("{q:?}"),
+                "must be finite and non-zero ([x, y, z, w])",
+            )?;
+            let uq = nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
+                q[3], q[0], q[1], q[2],
+            ));
+            placement.rotation = uq.to_rotation_matrix();
+        }
         let name = o.name.clone().unwrap_or_else(|| format!("{kind} {k}"));
-        Obstacle::new(name, geometry, placement.isometry()).map_err(at(&prefix))
+        Obstacle::new(name, geometry, placement).map_err(at(&prefix))
     }
 
     /// Links of the scenario's largest design ([`DesignSpace::largest`]) that touch an obstacle

@@ -184,9 +184,13 @@ pub fn generate(preset: Preset, seed: u64) -> ScenarioSpec {
                 shape: ShapeKind::Sphere,
                 position: [c.x, c.y, c.z],
                 rpy: None,
+                quaternion: None,
                 radius: Some(*r),
                 length: None,
                 size: None,
+                file: None,
+                representation: None,
+                scale: None,
             })
             .collect(),
         task: tasks

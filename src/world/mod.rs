@@ -5,5 +5,5 @@ pub mod mesh;
 pub mod obstacle;
 pub mod workspace;
 
-pub use obstacle::{Obstacle, ObstacleShape};
+pub use obstacle::{MeshRepresentation, Obstacle, ObstacleShape};
 pub use workspace::{Contact, Workspace};

@@ -1,11 +1,39 @@
 //! Obstacles: parry shapes with a pose (paper Eq. 3, generalised from spheres).
 
 use super::convert::{to_parry_point, to_parry_pose};
+use super::mesh::load_mesh;
 use crate::error::{Error, Result};
 use nalgebra::{IsometryMatrix3, Point3, Rotation3, Vector3};
 use parry3d_f64::math::Pose;
 use parry3d_f64::query;
 use parry3d_f64::shape::{Segment, SharedShape};
+
+/// How a mesh obstacle stands in for collision checking.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum MeshRepresentation {
+    /// The convex hull (parry `ConvexPolyhedron`): fast and conservative, fills every cavity.
+    #[default]
+    Hull,
+    /// An approximate convex decomposition (V-HACD, resolution 32, into a parry `Compound`):
+    /// keeps the larger concavities of a solid, non-convex body.
+    Decomposition,
+    /// The triangle mesh itself (parry `TriMesh`, oriented): for thin shells such as a glovebox.
+    /// Contacts are with its surface; points enclosed by a closed mesh count as inside it for
+    /// task-point validation.
+    Trimesh,
+}
+
+impl MeshRepresentation {
+    /// The name used in files.
+    pub fn name(self) -> &'static str {
+        match self {
+            MeshRepresentation::Hull => "hull",
+            MeshRepresentation::Decomposition => "decomposition",
+            MeshRepresentation::Trimesh => "trimesh",
+        }
+    }
+}
 
 /// What an obstacle is, as written in a scenario. Lengths in metres.
 #[derive(Clone, Debug, PartialEq)]
@@ -35,6 +63,16 @@ pub enum ObstacleShape {
         /// Radius.
         radius: f64,
     },
+    /// A triangle mesh loaded from an STL or OBJ file, scaled per axis in its own frame, then
+    /// placed.
+    Mesh {
+        /// The mesh file.
+        file: std::path::PathBuf,
+        /// How it stands in for collision checking.
+        representation: MeshRepresentation,
+        /// Scale factors along the mesh's x, y, z.
+        scale: [f64; 3],
+    },
 }
 
 impl ObstacleShape {
@@ -45,6 +83,7 @@ impl ObstacleShape {
             ObstacleShape::Capsule { .. } => "capsule",
             ObstacleShape::Cuboid { .. } => "cuboid",
             ObstacleShape::Cylinder { .. } => "cylinder",
+            ObstacleShape::Mesh { .. } => "mesh",
         }
     }
 
@@ -87,14 +126,53 @@ impl ObstacleShape {
                 positive("radius", radius)?;
                 positive("length", length)
             }
+            ObstacleShape::Mesh { scale, .. } => {
+                if scale.iter().all(|v| v.is_finite() && *v > 0.0) {
+                    Ok(())
+                } else {
+                    Err(Error::invalid(
+                        "scale",
+                        format!("{scale:?}"),
+                        "every factor must be positive and finite",
+                    ))
+                }
+            }
         }
     }
 
     /// The parry shape and the transform from the obstacle's frame to the shape's own frame
-    /// (parry's cylinders stand along y, ours along z).
-    fn parry(&self) -> (SharedShape, IsometryMatrix3<f64>) {
+    /// (parry's cylinders stand along y, ours along z). Loads mesh files.
+    fn parry(&self) -> Result<(SharedShape, IsometryMatrix3<f64>)> {
         let id = IsometryMatrix3::identity();
-        match *self {
+        Ok(match *self {
+            ObstacleShape::Mesh {
+                ref file,
+                representation,
+                scale,
+            } => {
+                let mut mesh = load_mesh(file).map_err(|source| Error::Mesh {
+                    field: "file".into(),
+                    source,
+                })?;
+                for v in &mut mesh.vertices {
+                    for (c, s) in v.iter_mut().zip(scale) {
+                        *c *= s;
+                    }
+                }
+                let bad = |reason: String| Error::invalid("file", file.display(), reason);
+                let shape = match representation {
+                    MeshRepresentation::Hull => mesh
+                        .to_convex_hull()
+                        .ok_or_else(|| bad("no convex hull (degenerate mesh)".into()))?,
+                    MeshRepresentation::Decomposition => mesh
+                        .to_convex_decomposition()
+                        .map_err(|e| bad(e.to_string()))?,
+                    MeshRepresentation::Trimesh => {
+                        SharedShape::new(mesh.to_parry_trimesh().map_err(|e| bad(e.to_string()))?)
+                    }
+                };
+                (shape, id)
+            }
             ObstacleShape::Sphere { radius } => (SharedShape::ball(radius), id),
             ObstacleShape::Capsule { length, radius } => {
                 (SharedShape::capsule_z(0.5 * length, radius), id)
@@ -110,7 +188,7 @@ impl ObstacleShape {
                     Rotation3::from_axis_angle(&Vector3::x_axis(), std::f64::consts::FRAC_PI_2),
                 ),
             ),
-        }
+        })
     }
 }
 
@@ -136,7 +214,7 @@ impl Obstacle {
         placement: IsometryMatrix3<f64>,
     ) -> Result<Self> {
         geometry.validate()?;
-        let (shape, local) = geometry.parry();
+        let (shape, local) = geometry.parry()?;
         let sphere = match geometry {
             ObstacleShape::Sphere { radius } => {
                 Some((Point3::from(placement.translation.vector), radius))
