@@ -129,8 +129,8 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
                 s.planner.body.name()
             );
             println!(
-                "{:>8} {:>10} {:>8} {:>11} {:>13} {:>12}",
-                "L_max", "checker", "blocked", "false-free", "false-blocked", "µs/edge"
+                "{:>8} {:>10} {:>8} {:>12} {:>14} {:>9} {:>8}",
+                "L_max", "checker", "blocked", "false-free", "false-blocked", "µs/edge", "FK/edge"
             );
             for l in lmax {
                 let edges = oracle::sample_edges(&scene, &chain, l, s.planner.lambda, count, seed);
@@ -142,7 +142,7 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
                     let checker = make_checker(kind, scene.clone(), s.planner.body);
                     let r = oracle::agreement(checker.as_ref(), &chain, &edges, &verdicts);
                     println!(
-                        "{:>8.4} {:>10} {:>8} {:>5} {:>5.1}% {:>6} {:>5.1}% {:>12.2}",
+                        "{:>8.4} {:>10} {:>8} {:>5} ({:>4.1}%) {:>6} ({:>4.1}%) {:>9.2} {:>8.1}",
                         l,
                         r.checker,
                         r.blocked,
@@ -150,7 +150,8 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
                         100.0 * r.false_free_rate(),
                         r.false_blocked,
                         100.0 * r.false_blocked_rate(),
-                        1e6 * r.seconds_per_edge
+                        1e6 * r.seconds_per_edge,
+                        r.fk_per_edge
                     );
                 }
             }

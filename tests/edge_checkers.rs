@@ -161,3 +161,16 @@ fn sampled_edges_respect_the_step_bound() {
         assert!(l <= PI / 4.0 + 1e-9, "{l}");
     }
 }
+
+#[test]
+fn certified_has_no_false_free_edge_on_a_mesh_scene() {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scenarios/pipework.toml");
+    let s = Scenario::load(&path).unwrap();
+    assert!(s
+        .workspace
+        .obstacles
+        .iter()
+        .any(|o| matches!(o.geometry, kinsynth::world::ObstacleShape::Mesh { .. })));
+    check_certified_against_oracle(&s, 2000, 23);
+}

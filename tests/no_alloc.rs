@@ -3,14 +3,22 @@
 use kinsynth::scenario::preset::{generate, Preset};
 use kinsynth::Scenario;
 use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::cell::Cell;
 
 struct Counting;
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+thread_local! {
+    /// Allocations made by this thread (tests run in parallel threads).
+    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
+}
+
+fn allocations() -> usize {
+    ALLOCATIONS.with(|c| c.get())
+}
 
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
         unsafe { System.alloc(layout) }
     }
     unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
@@ -34,12 +42,45 @@ fn fk_and_colliders_do_not_allocate() {
         .collect();
     chain.fk(&a, &mut frames);
     chain.colliders(&frames, &mut colliders); // sizes the buffer once
-    let before = ALLOCATIONS.load(Ordering::SeqCst);
+    let before = allocations();
     for _ in 0..100 {
         chain.fk(&a, &mut frames);
         chain.colliders(&frames, &mut colliders);
     }
-    let after = ALLOCATIONS.load(Ordering::SeqCst);
+    let after = allocations();
     assert_eq!(after - before, 0, "allocations inside fk/colliders");
     assert_eq!(colliders.len(), 8 * 4);
+}
+
+#[test]
+fn edge_checks_do_not_allocate_once_warm() {
+    use kinsynth::collision::oracle::sample_edges;
+    use kinsynth::collision::{make_checker, BodyModel, CheckerKind, CollisionScene, Scratch};
+    use std::sync::Arc;
+    let s = Scenario::from_spec(&generate(Preset::Paper3d, 2)).unwrap();
+    let chain = s.space.largest().chain();
+    let scene = Arc::new(CollisionScene::new(&s.workspace));
+    let edges = sample_edges(&scene, &chain, std::f64::consts::FRAC_PI_4, 0.1, 200, 1);
+    for kind in [
+        CheckerKind::Discrete,
+        CheckerKind::Segment,
+        CheckerKind::Certified,
+    ] {
+        for body in [BodyModel::Capsules, BodyModel::Points] {
+            let checker = make_checker(kind, scene.clone(), body);
+            let mut scratch = Scratch::new(&chain);
+            // Warm-up: buffers grow to their working size.
+            for (a, b) in &edges {
+                checker.node_free(&chain, a, &mut scratch);
+                checker.edge_free(&chain, a, b, &mut scratch);
+            }
+            let before = allocations();
+            for (a, b) in &edges {
+                checker.node_free(&chain, a, &mut scratch);
+                checker.edge_free(&chain, a, b, &mut scratch);
+            }
+            let after = allocations();
+            assert_eq!(after - before, 0, "{kind} with {body:?} allocated");
+        }
+    }
 }

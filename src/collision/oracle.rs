@@ -135,8 +135,10 @@ pub struct Agreement {
     pub false_free: usize,
     /// Edges the checker calls blocked that the oracle finds free (lost motions).
     pub false_blocked: usize,
-    /// Mean wall-clock time per edge (seconds), node check of the start included.
+    /// Mean wall-clock time per `edge_free` call (seconds).
     pub seconds_per_edge: f64,
+    /// Mean forward-kinematics evaluations per edge.
+    pub fk_per_edge: f64,
 }
 
 impl Agreement {
@@ -191,5 +193,6 @@ pub fn agreement(
         false_free,
         false_blocked,
         seconds_per_edge: seconds / edges.len().max(1) as f64,
+        fk_per_edge: scratch.stats.fk as f64 / edges.len().max(1) as f64,
     }
 }

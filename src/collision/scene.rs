@@ -91,6 +91,19 @@ impl CollisionScene {
         self.obstacles.is_empty()
     }
 
+    /// The obstacles whose bounding sphere comes within `margin` of the ball (`center`,
+    /// `radius`): the broad phase. Indices are written to `out` (cleared first).
+    #[inline]
+    pub fn near(&self, center: &Point3<f64>, radius: f64, margin: f64, out: &mut Vec<u32>) {
+        out.clear();
+        for (k, (c, r)) in self.bounds.iter().enumerate() {
+            let reach = radius + r + margin;
+            if (c - center).norm_squared() < reach * reach {
+                out.push(k as u32);
+            }
+        }
+    }
+
     /// A lower bound of the distance between the capsule (`a`–`b`, `radius`) and obstacle `k`,
     /// from its bounding sphere; exact for spheres.
     #[inline]

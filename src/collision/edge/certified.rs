@@ -26,7 +26,7 @@
 //! and capsules, parry's GJK otherwise).
 
 use super::{EdgeChecker, Scratch};
-use crate::collision::body::BodyModel;
+use crate::collision::body::{enclosing_ball, BodyModel};
 use crate::collision::scene::CollisionScene;
 use crate::kinematics::Chain;
 use std::sync::Arc;
@@ -156,6 +156,7 @@ impl EdgeChecker for Certified {
             bounds,
             certified: work,
             stats,
+            near,
             ..
         } = scratch;
         work.delta.clear();
@@ -169,33 +170,42 @@ impl EdgeChecker for Certified {
         stats.fk += 2;
         chain.fk(from, fa);
         chain.fk(to, fb);
-        for (s, (sa, sb)) in fa.segments.iter().zip(&fb.segments).enumerate() {
-            let reach = work.reach[s];
-            for k in 0..scene.len() {
-                // Broad phase: too far to be reached during the whole edge.
-                if scene.lower_bound(k, &sa[0], &sa[1], r) - eps > reach {
-                    continue;
+        for link in 1..=chain.link_count() {
+            let segs = chain.link_segments(link);
+            if segs.is_empty() {
+                continue;
+            }
+            // Broad phase: the link's enclosing ball at the start, grown by how far the link
+            // can move during the whole edge.
+            let link_reach = work.reach[segs.clone()].iter().copied().fold(0.0, f64::max);
+            let (c, rad) = enclosing_ball(fa.segments[segs.clone()].iter().flatten());
+            scene.near(&c, rad + r, eps + link_reach, near);
+            for &k in near.iter() {
+                let k = k as usize;
+                for s in segs.clone() {
+                    let (sa, sb) = (&fa.segments[s], &fb.segments[s]);
+                    let reach = work.reach[s];
+                    let c0 = scene.distance(k, &sa[0], &sa[1], r) - eps;
+                    if c0 <= 0.0 {
+                        return false;
+                    }
+                    if c0 > reach {
+                        continue;
+                    }
+                    let c1 = scene.distance(k, &sb[0], &sb[1], r) - eps;
+                    if c1 <= 0.0 {
+                        return false;
+                    }
+                    if c0 + c1 > reach {
+                        continue;
+                    }
+                    work.pairs.push(Pair {
+                        segment: s as u32,
+                        obstacle: k as u32,
+                        c0,
+                        c1,
+                    });
                 }
-                let c0 = scene.distance(k, &sa[0], &sa[1], r) - eps;
-                if c0 <= 0.0 {
-                    return false;
-                }
-                if c0 > reach {
-                    continue;
-                }
-                let c1 = scene.distance(k, &sb[0], &sb[1], r) - eps;
-                if c1 <= 0.0 {
-                    return false;
-                }
-                if c0 + c1 > reach {
-                    continue;
-                }
-                work.pairs.push(Pair {
-                    segment: s as u32,
-                    obstacle: k as u32,
-                    c0,
-                    c1,
-                });
             }
         }
         if work.pairs.is_empty() {

@@ -99,8 +99,8 @@ pub struct Scratch {
     pub(crate) fm: Frames,
     pub(crate) q: Vec<f64>,
     pub(crate) colliders: Vec<Point3<f64>>,
-    pub(crate) pa: Vec<Point3<f64>>,
-    pub(crate) pb: Vec<Point3<f64>>,
+    pub(crate) colliders_b: Vec<Point3<f64>>,
+    pub(crate) near: Vec<u32>,
     pub(crate) bounds: MotionBounds,
     pub(crate) certified: certified::Work,
     /// Counters since creation.
@@ -116,8 +116,8 @@ impl Scratch {
             fm: chain.frames(),
             q: vec![0.0; chain.dof()],
             colliders: Vec::new(),
-            pa: Vec::new(),
-            pb: Vec::new(),
+            colliders_b: Vec::new(),
+            near: Vec::new(),
             bounds: MotionBounds::new(chain),
             certified: certified::Work::default(),
             stats: EdgeStats::default(),
@@ -148,10 +148,18 @@ pub(crate) fn node_free_with(
     scratch.stats.fk += 1;
     chain.fk(a, &mut scratch.fa);
     match body {
-        BodyModel::Capsules => super::body::capsules_free(scene, chain, &scratch.fa),
+        BodyModel::Capsules => {
+            super::body::capsules_free(scene, chain, &scratch.fa, &mut scratch.near)
+        }
         BodyModel::Points => {
-            super::body::body_points(chain, &scratch.fa, &mut scratch.colliders, &mut scratch.pa);
-            super::body::points_free(scene, chain.radius(), &scratch.pa)
+            chain.colliders(&scratch.fa, &mut scratch.colliders);
+            super::body::points_free(
+                scene,
+                chain,
+                &scratch.fa,
+                &scratch.colliders,
+                &mut scratch.near,
+            )
         }
     }
 }

@@ -10,11 +10,12 @@
 //!
 //! The straight segment is the chord of each point's real (curved) path, so a large rotation
 //! can sweep the real body across an obstacle the chords miss; the paper limits `L_max`
-//! (π/3 or less) for this reason. With [`BodyModel::Capsules`] the end configuration's capsules
-//! are checked too.
+//! (π/3 or less) for this reason. Between the points the body is not checked at all, also at
+//! the end configuration: [`EdgeChecker::node_free`] (which the planner calls on every new
+//! node) checks the configured body model there.
 
 use super::{EdgeChecker, Scratch};
-use crate::collision::body::{body_points, capsules_free, BodyModel};
+use crate::collision::body::{enclosing_ball, link_points, BodyModel};
 use crate::collision::scene::CollisionScene;
 use crate::kinematics::Chain;
 use std::sync::Arc;
@@ -45,18 +46,35 @@ impl EdgeChecker for SegmentChecker {
     fn edge_free(&self, chain: &Chain, from: &[f64], to: &[f64], scratch: &mut Scratch) -> bool {
         scratch.stats.edges += 1;
         scratch.stats.fk += 2;
-        chain.fk(from, &mut scratch.fa);
-        chain.fk(to, &mut scratch.fb);
-        if self.body == BodyModel::Capsules && !capsules_free(&self.scene, chain, &scratch.fb) {
-            return false;
-        }
-        body_points(chain, &scratch.fa, &mut scratch.colliders, &mut scratch.pa);
-        body_points(chain, &scratch.fb, &mut scratch.colliders, &mut scratch.pb);
+        let scene = &*self.scene;
+        let Scratch {
+            fa,
+            fb,
+            colliders,
+            colliders_b,
+            near,
+            ..
+        } = scratch;
+        chain.fk(from, fa);
+        chain.fk(to, fb);
+        chain.colliders(fa, colliders);
+        chain.colliders(fb, colliders_b);
         let r = chain.radius();
-        scratch
-            .pa
-            .iter()
-            .zip(&scratch.pb)
-            .all(|(p, q)| self.scene.capsule_free(p, q, r))
+        let eps = scene.clearance();
+        for link in 1..=chain.link_count() {
+            let pa = link_points(chain, fa, colliders, link);
+            let pb = link_points(chain, fb, colliders_b, link);
+            // Broad phase: one ball around the link's points at both ends of the edge.
+            let (c, rad) = enclosing_ball(pa.clone().chain(pb.clone()));
+            scene.near(&c, rad + r, eps, near);
+            for &k in near.iter() {
+                for (p, q) in pa.clone().zip(pb.clone()) {
+                    if scene.distance(k as usize, p, q, r) <= eps {
+                        return false;
+                    }
+                }
+            }
+        }
+        true
     }
 }
