@@ -6,6 +6,7 @@ pub mod design;
 pub mod error;
 pub mod io;
 pub mod kinematics;
+pub mod planning;
 pub mod scenario;
 pub mod world;
 

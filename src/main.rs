@@ -33,6 +33,26 @@ enum Command {
         /// The scenario file (TOML).
         file: PathBuf,
     },
+    /// Reachability of a design: the share of task points an RRT from home reaches.
+    Reach {
+        /// The scenario file (TOML).
+        file: PathBuf,
+        /// A design JSON or an optimiser's best.json. Default: the scenario's largest design.
+        #[arg(long)]
+        design: Option<PathBuf>,
+        /// Edge checker: discrete, segment, ccd or certified. Default: the scenario's.
+        #[arg(long)]
+        checker: Option<kinsynth::collision::CheckerKind>,
+        /// Step bound L_max. Default: the scenario's.
+        #[arg(long)]
+        lmax: Option<f64>,
+        /// Seed of the planner. Default: the scenario's.
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Write the report as JSON to this file (atomically).
+        #[arg(long)]
+        json: Option<PathBuf>,
+    },
     /// Compare the four edge checkers with the dense-sampling oracle on random edges.
     Edges {
         /// The scenario file (TOML).
@@ -102,6 +122,76 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
                     c.distance,
                     s.workspace.clearance
                 );
+            }
+        }
+        Command::Reach {
+            file,
+            design,
+            checker,
+            lmax,
+            seed,
+            json,
+        } => {
+            let s = Scenario::load(&file)?;
+            let design = match design {
+                Some(p) => kinsynth::Design::load(&p)?,
+                None => s.space.largest(),
+            };
+            let mut planner = s.planner.clone();
+            if let Some(c) = checker {
+                planner.checker = c;
+            }
+            if let Some(l) = lmax {
+                if !(l.is_finite() && l > 0.0) {
+                    return Err(kinsynth::Error::invalid(
+                        "--lmax",
+                        l,
+                        "must be positive and finite",
+                    ));
+                }
+                planner.l_max = l;
+            }
+            let seed = seed.unwrap_or(s.seed);
+            let chain = design.chain();
+            let scene = std::sync::Arc::new(kinsynth::collision::CollisionScene::new(&s.workspace));
+            let start = std::time::Instant::now();
+            let report = kinsynth::planning::reachability(
+                &chain,
+                &scene,
+                &s.workspace.tasks,
+                &planner,
+                seed,
+                0,
+            );
+            let elapsed = start.elapsed();
+            println!(
+                "R = {:.3} ({} of {} tasks) with {} at L_max {:.4}, seed {seed}: {} iterations, {} nodes, {} edge checks, {:.1} ms",
+                report.reachability,
+                report.reached(),
+                report.targets.len(),
+                report.checker,
+                report.l_max,
+                report.iterations,
+                report.nodes,
+                report.edge_checks,
+                elapsed.as_secs_f64() * 1e3
+            );
+            if let Some(why) = &report.home_blocked {
+                println!("  {why}");
+            }
+            for t in &report.targets {
+                println!(
+                    "  task {:>3} {:<11} error {:.4} m  path {}",
+                    t.index,
+                    if t.reached { "reached" } else { "not reached" },
+                    t.error,
+                    t.path
+                        .as_ref()
+                        .map_or("-".to_string(), |p| format!("{} nodes", p.points.len()))
+                );
+            }
+            if let Some(path) = json {
+                kinsynth::io::write_atomic(&path, report.to_json().as_bytes())?;
             }
         }
         Command::Edges {

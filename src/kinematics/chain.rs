@@ -404,6 +404,43 @@ impl Chain {
         }
     }
 
+    /// The position Jacobian of the end effector, `∂p_ee/∂a` (3 × dof, column-major: column `k`
+    /// at `out[3k..3k+3]`), at the configuration whose frames are in `frames` (from
+    /// [`Chain::fk`] with the same `a`). For a rotation axis the column is `ω̂ × (p_ee − o)`
+    /// with `ω̂` the axis direction after the link's earlier rotations and `o` the joint origin;
+    /// for a translation axis it is the axis direction. Allocation-free.
+    pub fn jacobian(&self, a: &[f64], frames: &Frames, out: &mut [f64]) {
+        debug_assert_eq!(out.len(), 3 * self.free.len());
+        let ee = frames.end_effector().coords;
+        let mut rot: Matrix3<f64> = *self.base.rotation.matrix();
+        for (i, link) in self.links.iter().enumerate() {
+            if !link.identity_rotation {
+                rot *= link.transform.rotation.matrix();
+            }
+            let origin = frames.joints[i].coords;
+            for op in &self.ops[link.ops.clone()] {
+                match *op {
+                    Op::RotConst { axis, s, c } => rotate_local(&mut rot, axis, s, c),
+                    Op::RotFree { axis, k } => {
+                        let w = rot.column(axis.index()).into_owned();
+                        let col = w.cross(&(ee - origin));
+                        out[3 * k..3 * k + 3].copy_from_slice(col.as_slice());
+                        let (s, c) = libm::sincos(a[k]);
+                        rotate_local(&mut rot, axis, s, c);
+                    }
+                    Op::TransConst { .. } => {}
+                    Op::TransFree { axis, k } => {
+                        let d = rot.column(axis.index() - 3).into_owned();
+                        out[3 * k..3 * k + 3].copy_from_slice(d.as_slice());
+                    }
+                }
+            }
+            // The next link starts from F_i, whose rotation is `rot` (translations do not
+            // rotate); re-sync with the stored frame to avoid drift.
+            rot = *frames.frames[i + 1].rotation.matrix();
+        }
+    }
+
     /// The end-effector position for `a` (allocates a frame buffer; for one-off use).
     pub fn end_effector(&self, a: &[f64]) -> Point3<f64> {
         let mut f = self.frames();
@@ -484,6 +521,53 @@ mod tests {
         let p = f.end_effector();
         assert_relative_eq!(p.x, 1.0 + 0.5f64.cos(), epsilon = 1e-12);
         assert_relative_eq!(p.y, 0.5f64.sin(), epsilon = 1e-12);
+    }
+
+    #[test]
+    fn jacobian_matches_finite_differences() {
+        let mut r = [Range::ZERO; 6];
+        for (ax, lo, hi) in [
+            (Axis::Rx, -1.0, 1.0),
+            (Axis::Ry, -2.0, 2.0),
+            (Axis::Rz, -1.5, 1.5),
+            (Axis::Tx, 0.0, 0.3),
+            (Axis::Tz, -0.2, 0.2),
+        ] {
+            r[ax.index()] = Range::new(lo, hi);
+        }
+        let l1 = Link::from_dh(
+            &Dh {
+                theta: 0.3,
+                d: 0.2,
+                a: 0.4,
+                alpha: 0.7,
+            },
+            r,
+        );
+        let l2 = Link::from_dh(
+            &Dh {
+                a: 0.5,
+                alpha: -0.4,
+                ..Dh::default()
+            },
+            r,
+        );
+        let chain = Chain::new(IsometryMatrix3::identity(), &[l1, l2.clone(), l2], 0.1, 1);
+        let a: Vec<f64> = (0..chain.dof()).map(|k| 0.1 * k as f64 - 0.3).collect();
+        let mut f = chain.frames();
+        chain.fk(&a, &mut f);
+        let mut jac = vec![0.0; 3 * chain.dof()];
+        chain.jacobian(&a, &f, &mut jac);
+        let h = 1e-6;
+        for k in 0..chain.dof() {
+            let (mut ap, mut am) = (a.clone(), a.clone());
+            ap[k] += h;
+            am[k] -= h;
+            let d = (chain.end_effector(&ap) - chain.end_effector(&am)) / (2.0 * h);
+            for row in 0..3 {
+                assert_relative_eq!(jac[3 * k + row], d[row], epsilon = 1e-7);
+            }
+        }
     }
 
     #[test]

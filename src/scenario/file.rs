@@ -1,7 +1,8 @@
 //! The scenario file as written (TOML), before validation. See the README for the format.
 
-use super::config::{ObjectiveWeights, OptimizerConfig, PlannerConfig};
+use super::config::{ObjectiveWeights, OptimizerConfig};
 use crate::kinematics::Placement;
+use crate::planning::PlannerConfig;
 use serde::de::{self, SeqAccess, Visitor};
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 

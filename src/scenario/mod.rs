@@ -6,7 +6,8 @@ pub mod file;
 pub mod preset;
 
 pub use crate::collision::{BodyModel, CheckerKind};
-pub use config::{Algorithm, ObjectiveWeights, OptimizerConfig, PlannerConfig};
+pub use crate::planning::{PlannerConfig, Schedule};
+pub use config::{Algorithm, ObjectiveWeights, OptimizerConfig};
 pub use file::{AxesSpec, AxisSpec, LinkSpec, ObstacleSpec, ParamSpec, ScenarioSpec, ShapeKind};
 
 use crate::design::{AxisRanges, Design, DesignSpace, LinkDesign, Param, Variable};

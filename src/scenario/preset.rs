@@ -1,11 +1,12 @@
 //! Random scenarios like the paper's experiments (§IV-A planar, §IV-B volumetric).
 
-use super::config::{ObjectiveWeights, OptimizerConfig, PlannerConfig};
+use super::config::{ObjectiveWeights, OptimizerConfig};
 use super::file::{
     AxesSpec, AxisSpec, LinkSpec, ObstacleSpec, ParamSpec, RobotSpec, ScenarioSpec, ShapeKind,
     TaskSpec,
 };
 use crate::kinematics::Placement;
+use crate::planning::PlannerConfig;
 use nalgebra::{Point3, Vector3};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
