@@ -86,16 +86,10 @@ impl Tree {
         out
     }
 
-    /// Nearest node to `q` in actuation space (Euclidean), by linear scan.
+    /// Nearest node to `q` in actuation space (Euclidean), by linear scan; see
+    /// [`nearest_linear`].
     pub fn nearest_config(&self, q: &[f64]) -> u32 {
-        let mut best = (f64::INFINITY, 0u32);
-        for (i, c) in self.configs.chunks_exact(self.dof.max(1)).enumerate() {
-            let d: f64 = c.iter().zip(q).map(|(a, b)| (a - b) * (a - b)).sum();
-            if d < best.0 {
-                best = (d, i as u32);
-            }
-        }
-        best.1
+        nearest_linear(&self.configs, q) as u32
     }
 
     /// Node whose end effector is nearest to `p`.
@@ -109,6 +103,36 @@ impl Tree {
         }
         best.1
     }
+}
+
+/// Index of the point of `points` (flat, `q.len()` values per point) nearest to `q`
+/// (squared Euclidean), by linear scan; 0 for an empty set.
+///
+/// Measured against a k-d tree (kiddo) by `benches/nearest.rs`; see the README for the figures
+/// and the choice.
+pub fn nearest_linear(points: &[f64], q: &[f64]) -> usize {
+    let dim = q.len().max(1);
+    let mut best = (f64::INFINITY, 0);
+    for (i, c) in points.chunks_exact(dim).enumerate() {
+        // Four independent partial sums let the additions overlap in the pipeline.
+        let mut acc = [0.0f64; 4];
+        let mut quads = c.chunks_exact(4).zip(q.chunks_exact(4));
+        for (a, b) in &mut quads {
+            for l in 0..4 {
+                let d = a[l] - b[l];
+                acc[l] += d * d;
+            }
+        }
+        let tail = dim - dim % 4;
+        for (a, b) in c[tail..].iter().zip(&q[tail..]) {
+            acc[0] += (a - b) * (a - b);
+        }
+        let d = (acc[0] + acc[1]) + (acc[2] + acc[3]);
+        if d < best.0 {
+            best = (d, i);
+        }
+    }
+    best.1
 }
 
 /// What one RRT run produced.
