@@ -12,7 +12,9 @@ use std::hint::black_box;
 
 fn points<const K: usize>(n: usize, rng: &mut ChaCha8Rng) -> Vec<[f64; K]> {
     (0..n)
-        .map(|_| std::array::from_fn(|_| rng.random_range(-3.14..3.14)))
+        .map(|_| {
+            std::array::from_fn(|_| rng.random_range(-std::f64::consts::PI..std::f64::consts::PI))
+        })
         .collect()
 }
 
