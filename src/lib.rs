@@ -4,8 +4,10 @@
 pub mod collision;
 pub mod design;
 pub mod error;
+pub mod export;
 pub mod io;
 pub mod kinematics;
+pub mod optimize;
 pub mod planning;
 pub mod scenario;
 pub mod world;

@@ -33,6 +33,45 @@ enum Command {
         /// The scenario file (TOML).
         file: PathBuf,
     },
+    /// Optimise a design for a scenario (the main job): GA, PSO or ASA over the design space,
+    /// writing best.json, history.csv, reach.json and convergence.svg into --out.
+    Optimize {
+        /// The scenario file (TOML). Not needed with --resume.
+        file: Option<PathBuf>,
+        /// Optimiser. Default: the scenario's.
+        #[arg(long)]
+        optimizer: Option<kinsynth::scenario::Algorithm>,
+        /// Edge checker. Default: the scenario's.
+        #[arg(long)]
+        checker: Option<kinsynth::collision::CheckerKind>,
+        /// Step bound L_max. Default: the scenario's.
+        #[arg(long)]
+        lmax: Option<f64>,
+        /// The paper's baseline: ASA with node-only (discrete) checks at L_max = π/40.
+        #[arg(long, conflicts_with_all = ["optimizer", "checker", "lmax"])]
+        baseline: bool,
+        /// Seed. Default: the scenario's.
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Wall-clock budget in seconds. Default: the scenario's.
+        #[arg(long)]
+        time_limit: Option<f64>,
+        /// Budget in objective evaluations. Default: the scenario's.
+        #[arg(long)]
+        evaluations: Option<u64>,
+        /// Seconds between checkpoints. Default: the scenario's.
+        #[arg(long)]
+        checkpoint_interval: Option<f64>,
+        /// Output directory.
+        #[arg(long, required_unless_present = "resume")]
+        out: Option<PathBuf>,
+        /// Continue the run whose checkpoint is in this directory (results go there too).
+        #[arg(long)]
+        resume: Option<PathBuf>,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
     /// Reachability of a design: the share of task points an RRT from home reaches.
     Reach {
         /// The scenario file (TOML).
@@ -123,6 +162,116 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
                     s.workspace.clearance
                 );
             }
+        }
+        Command::Optimize {
+            file,
+            optimizer,
+            checker,
+            lmax,
+            baseline,
+            seed,
+            time_limit,
+            evaluations,
+            checkpoint_interval,
+            out,
+            resume,
+            quiet,
+        } => {
+            use kinsynth::optimize::runner::{Checkpoint, RunOptions, Runner};
+            let (scenario_path, out, checkpoint): (PathBuf, PathBuf, Option<Checkpoint>) =
+                match resume {
+                    Some(dir) => {
+                        let c = Runner::read_checkpoint(&dir)?;
+                        (c.scenario.clone(), dir, Some(c))
+                    }
+                    None => {
+                        let Some(f) = file else {
+                            return Err(kinsynth::Error::invalid(
+                                "SCENARIO",
+                                "missing",
+                                "give a scenario file (or --resume DIR)",
+                            ));
+                        };
+                        (f, out.expect("clap requires --out without --resume"), None)
+                    }
+                };
+            let s = Scenario::load(&scenario_path)?;
+            let (planner, options) = match &checkpoint {
+                Some(c) => (c.planner.clone(), c.options.clone()),
+                None => {
+                    let mut planner = s.planner.clone();
+                    let mut algorithm = s.optimizer.algorithm;
+                    if baseline {
+                        algorithm = kinsynth::scenario::Algorithm::Asa;
+                        planner.checker = kinsynth::collision::CheckerKind::Discrete;
+                        planner.l_max = std::f64::consts::PI / 40.0;
+                        planner.schedule = None;
+                    }
+                    if let Some(a) = optimizer {
+                        algorithm = a;
+                    }
+                    if let Some(c) = checker {
+                        planner.checker = c;
+                    }
+                    if let Some(l) = lmax {
+                        if !(l.is_finite() && l > 0.0) {
+                            return Err(kinsynth::Error::invalid(
+                                "--lmax",
+                                l,
+                                "must be positive and finite",
+                            ));
+                        }
+                        planner.l_max = l;
+                        planner.schedule = None;
+                    }
+                    let options = RunOptions {
+                        algorithm,
+                        seed: seed.unwrap_or(s.seed),
+                        time_limit: time_limit.or(s.optimizer.time_limit),
+                        evaluations: evaluations.or(s.optimizer.evaluations),
+                        patience: s.optimizer.patience,
+                        checkpoint_interval: checkpoint_interval
+                            .unwrap_or(s.optimizer.checkpoint_interval),
+                    };
+                    if options.time_limit.is_none() && options.evaluations.is_none() {
+                        return Err(kinsynth::Error::invalid(
+                            "budget",
+                            "none",
+                            "give --time-limit or --evaluations (or set them in [optimizer])",
+                        ));
+                    }
+                    (planner, options)
+                }
+            };
+            let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+            {
+                let stop = stop.clone();
+                // A second Ctrl-C while results are written ends the process at once.
+                let _ = ctrlc::set_handler(move || {
+                    if stop.swap(true, std::sync::atomic::Ordering::SeqCst) {
+                        std::process::exit(130);
+                    }
+                });
+            }
+            let runner = Runner::new(&s, &scenario_path, planner.clone(), options.clone(), &out);
+            let mut observer = progress::Bar::new(&options, quiet);
+            let summary = runner.run(checkpoint, &stop, &mut observer)?;
+            println!(
+                "{}: {} + {} (L_max {:.4}), seed {}: R = {:.3}, cost {:.4}, {} links and {} joints kept, total length {:.3} m; {} evaluations in {:.1} s ({})",
+                out.display(),
+                summary.optimizer,
+                summary.checker,
+                summary.l_max,
+                summary.seed,
+                summary.reachability,
+                summary.cost,
+                summary.links_kept,
+                summary.joints_kept,
+                summary.design.total_length(),
+                summary.evaluations,
+                summary.elapsed_s,
+                summary.stopped
+            );
         }
         Command::Reach {
             file,
@@ -248,6 +397,63 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
         }
     }
     Ok(())
+}
+
+mod progress {
+    //! The progress bar of `kinsynth optimize` (indicatif, on stderr; hidden when stderr is
+    //! not a terminal or with `--quiet`).
+    use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+    use kinsynth::optimize::runner::{HistoryRow, Observer, RunOptions};
+
+    pub struct Bar {
+        bar: ProgressBar,
+        by_evaluations: bool,
+    }
+
+    impl Bar {
+        pub fn new(options: &RunOptions, quiet: bool) -> Self {
+            let (len, by_evaluations) = match (options.evaluations, options.time_limit) {
+                (Some(n), _) => (n, true),
+                (None, Some(t)) => ((t * 10.0) as u64, false),
+                (None, None) => (0, false),
+            };
+            let bar = ProgressBar::new(len);
+            if quiet {
+                bar.set_draw_target(ProgressDrawTarget::hidden());
+            }
+            bar.set_style(
+                ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {percent:>3}% {msg}")
+                    .expect("valid template")
+                    .progress_chars("=> "),
+            );
+            Bar {
+                bar,
+                by_evaluations,
+            }
+        }
+    }
+
+    impl Observer for Bar {
+        fn generation(&mut self, row: &HistoryRow) {
+            let rate = if row.elapsed_s > 0.0 {
+                row.evaluations as f64 / row.elapsed_s
+            } else {
+                0.0
+            };
+            self.bar.set_position(if self.by_evaluations {
+                row.evaluations
+            } else {
+                (row.elapsed_s * 10.0) as u64
+            });
+            self.bar.set_message(format!(
+                "{} evals ({rate:.0}/s)  best cost {:.4}  best R {:.2}",
+                row.evaluations, row.best_cost, row.best_reachability
+            ));
+        }
+        fn finish(&mut self) {
+            self.bar.finish_and_clear();
+        }
+    }
 }
 
 fn main() -> ExitCode {

@@ -1,6 +1,9 @@
 //! Settings sections of a scenario: planner, objective weights, optimiser. Every field has a
 //! documented default so a scenario may leave a section out.
 
+use crate::optimize::asa::AsaParams;
+use crate::optimize::ga::GaParams;
+use crate::optimize::pso::PsoParams;
 use serde::{Deserialize, Serialize};
 
 /// The `[objective]` section: weights `λ0 … λ5` of paper Eq. 23.
@@ -49,7 +52,7 @@ impl ObjectiveWeights {
 }
 
 /// Optimisation algorithm, chosen by name in `optimizer.algorithm` and `--optimizer`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum Algorithm {
     /// Real-coded genetic algorithm.
@@ -78,6 +81,14 @@ pub struct OptimizerConfig {
     /// Budget in objective evaluations. Default: none.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub evaluations: Option<u64>,
+    /// Seconds between checkpoints. Default 10.
+    pub checkpoint_interval: f64,
+    /// GA settings.
+    pub ga: GaParams,
+    /// PSO settings (`swarm` is taken from `population`).
+    pub pso: PsoParams,
+    /// ASA settings.
+    pub asa: AsaParams,
 }
 
 impl Default for OptimizerConfig {
@@ -88,6 +99,10 @@ impl Default for OptimizerConfig {
             patience: 30,
             time_limit: Some(60.0),
             evaluations: None,
+            checkpoint_interval: 10.0,
+            ga: GaParams::default(),
+            pso: PsoParams::default(),
+            asa: AsaParams::default(),
         }
     }
 }

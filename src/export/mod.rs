@@ -1,0 +1,3 @@
+//! Results for the rest of the tool chain: plots of a run.
+
+pub mod plot;

@@ -1,0 +1,239 @@
+//! Adaptive simulated annealing (Ingber 1989, 1996) with re-annealing, in a batch form that
+//! evaluates in parallel.
+//!
+//! Each axis `i` has its own generating temperature `T_i = T_0·exp(−c·k_i^{1/D})` (`D` the
+//! dimension, `k_i` its annealing time) and a candidate moves it by
+//! `y = sgn(u − ½)·T_i·((1 + 1/T_i)^{|2u−1|} − 1)` times the axis's range (Ingber's fat-tailed
+//! generating distribution), resampled until it falls within the bounds. Acceptance uses the
+//! Metropolis rule with its own temperature `T_a = T_a0·exp(−c·k_a^{1/D})`. The rate `c` is set so
+//! that the temperatures fall by `temperature_ratio` over `expected_evaluations` (Ingber's
+//! quenching, tuned to the budget).
+//!
+//! Batch form: a step draws `batch` candidates around the current point, evaluates them in
+//! parallel, then applies the acceptance rule to them in order. Re-annealing: every
+//! `reanneal_interval` acceptances, the cost's sensitivity `s_i` along each axis is estimated at
+//! the best point by finite differences (`D` more evaluations, in parallel), each `T_i` is
+//! stretched by `s_max/s_i` (insensitive axes search wider) with `k_i` reset to match, and the
+//! acceptance temperature restarts from the best cost's scale.
+
+use super::{
+    evaluate_batch, keep_best, random_point, Evaluated, Optimizer, StepContext, StepReport,
+};
+use rand::RngExt;
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+/// ASA settings (`[optimizer.asa]`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct AsaParams {
+    /// Candidates per step, evaluated in parallel. Default 16.
+    pub batch: usize,
+    /// Initial generating temperature `T_0` (as a fraction of each range). Default 1.
+    pub initial_temperature: f64,
+    /// Factor by which the temperatures fall over `expected_evaluations`. Default 1e-6.
+    pub temperature_ratio: f64,
+    /// Evaluations over which the schedule runs. Default 20000.
+    pub expected_evaluations: u64,
+    /// Acceptances between re-annealings. Default 100.
+    pub reanneal_interval: u64,
+}
+
+impl Default for AsaParams {
+    fn default() -> Self {
+        AsaParams {
+            batch: 16,
+            initial_temperature: 1.0,
+            temperature_ratio: 1e-6,
+            expected_evaluations: 20_000,
+            reanneal_interval: 100,
+        }
+    }
+}
+
+/// The annealer's state.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Asa {
+    params: AsaParams,
+    seeds: Vec<Vec<f64>>,
+    current: Option<Evaluated>,
+    best: Option<Evaluated>,
+    /// Per-axis annealing times and initial temperatures.
+    k: Vec<f64>,
+    t0: Vec<f64>,
+    /// Acceptance annealing time and initial temperature.
+    k_accept: f64,
+    t0_accept: f64,
+    accepted: u64,
+    since_reanneal: u64,
+}
+
+impl Asa {
+    /// An annealer starting from the first of `seeds` (or a random point).
+    pub fn new(params: AsaParams, seeds: Vec<Vec<f64>>) -> Self {
+        Asa {
+            params,
+            seeds,
+            current: None,
+            best: None,
+            k: Vec::new(),
+            t0: Vec::new(),
+            k_accept: 0.0,
+            t0_accept: 1.0,
+            accepted: 0,
+            since_reanneal: 0,
+        }
+    }
+
+    /// Restores an annealer from [`Optimizer::save`] output.
+    pub fn load(state: serde_json::Value) -> serde_json::Result<Self> {
+        serde_json::from_value(state)
+    }
+
+    /// The rate `c` that brings a temperature down by `temperature_ratio` at
+    /// `expected_evaluations`, for dimension `d`.
+    fn rate(&self, d: usize) -> f64 {
+        let k_end = (self.params.expected_evaluations.max(2)) as f64;
+        -self.params.temperature_ratio.ln() / k_end.powf(1.0 / d.max(1) as f64)
+    }
+
+    fn temperature(&self, t0: f64, k: f64, d: usize) -> f64 {
+        t0 * (-self.rate(d) * k.max(0.0).powf(1.0 / d.max(1) as f64)).exp()
+    }
+
+    fn generate(&self, x: &[f64], lower: &[f64], upper: &[f64], rng: &mut ChaCha8Rng) -> Vec<f64> {
+        let d = x.len();
+        (0..d)
+            .map(|i| {
+                let range = upper[i] - lower[i];
+                if range <= 0.0 {
+                    return x[i];
+                }
+                let t = self.temperature(self.t0[i], self.k[i], d).max(1e-300);
+                for _ in 0..100 {
+                    let u: f64 = rng.random();
+                    let y = (u - 0.5).signum()
+                        * t
+                        * ((1.0 + 1.0 / t).powf((2.0 * u - 1.0).abs()) - 1.0);
+                    let v = x[i] + y * range;
+                    if v >= lower[i] && v <= upper[i] {
+                        return v;
+                    }
+                }
+                x[i]
+            })
+            .collect()
+    }
+}
+
+impl Optimizer for Asa {
+    fn name(&self) -> &'static str {
+        "asa"
+    }
+
+    fn step(&mut self, ctx: StepContext<'_>) -> StepReport {
+        let (lower, upper) = (ctx.problem.lower(), ctx.problem.upper());
+        let d = lower.len();
+        let rng = ctx.rng;
+        let Some(current) = self.current.clone() else {
+            // First step: the start point plus a batch of random points, whose cost spread sets
+            // the initial acceptance temperature.
+            let mut xs: Vec<Vec<f64>> = self.seeds.iter().take(1).cloned().collect();
+            while xs.len() < self.params.batch.max(2) {
+                xs.push(random_point(lower, upper, rng));
+            }
+            let n = xs.len() as u64;
+            let ev = evaluate_batch(ctx.problem, xs, ctx.first_stream, ctx.progress);
+            let mean = ev.iter().map(|e| e.cost).sum::<f64>() / ev.len() as f64;
+            let var = ev.iter().map(|e| (e.cost - mean).powi(2)).sum::<f64>() / ev.len() as f64;
+            self.t0_accept = var.sqrt().max(1e-9);
+            self.k = vec![0.0; d];
+            self.t0 = vec![self.params.initial_temperature; d];
+            for e in &ev {
+                keep_best(&mut self.best, e);
+            }
+            self.current = Some(ev[0].clone());
+            return StepReport { evaluations: n };
+        };
+        let xs: Vec<Vec<f64>> = (0..self.params.batch.max(1))
+            .map(|_| self.generate(&current.x, lower, upper, rng))
+            .collect();
+        let mut evaluations = xs.len() as u64;
+        let ev = evaluate_batch(ctx.problem, xs, ctx.first_stream, ctx.progress);
+        let mut cur = current;
+        for e in ev {
+            keep_best(&mut self.best, &e);
+            let t_accept = self
+                .temperature(self.t0_accept, self.k_accept, d)
+                .max(1e-300);
+            let delta = e.cost - cur.cost;
+            let u: f64 = rng.random();
+            if delta <= 0.0 || u < (-delta / t_accept).exp() {
+                cur = e;
+                self.accepted += 1;
+                self.since_reanneal += 1;
+            }
+            self.k_accept += 1.0;
+            for k in &mut self.k {
+                *k += 1.0;
+            }
+        }
+        self.current = Some(cur);
+        if self.since_reanneal >= self.params.reanneal_interval {
+            self.since_reanneal = 0;
+            let best = self
+                .best
+                .clone()
+                .expect("a best point after the first step");
+            let probes: Vec<Vec<f64>> = (0..d)
+                .map(|i| {
+                    let mut x = best.x.clone();
+                    let h = 1e-3 * (upper[i] - lower[i]);
+                    x[i] = if x[i] + h <= upper[i] {
+                        x[i] + h
+                    } else {
+                        x[i] - h
+                    };
+                    x
+                })
+                .collect();
+            let stream = ctx.first_stream + evaluations;
+            evaluations += probes.len() as u64;
+            let ev = evaluate_batch(ctx.problem, probes, stream, ctx.progress);
+            let s: Vec<f64> = ev
+                .iter()
+                .enumerate()
+                .map(|(i, e)| {
+                    keep_best(&mut self.best, e);
+                    let h = (e.x[i] - best.x[i]).abs().max(1e-300);
+                    ((e.cost - best.cost) / h).abs()
+                })
+                .collect();
+            let s_max = s.iter().copied().fold(0.0, f64::max);
+            if s_max > 0.0 {
+                let c = self.rate(d);
+                for i in 0..d {
+                    let t = self.temperature(self.t0[i], self.k[i], d);
+                    let t_new = (t * s_max / s[i].max(s_max * 1e-6)).min(self.t0[i]);
+                    self.k[i] = ((self.t0[i] / t_new).ln() / c).max(0.0).powf(d as f64);
+                }
+            }
+            // Acceptance: restart from the scale of the best cost, keeping the current time.
+            let t_now = self.temperature(self.t0_accept, self.k_accept, d);
+            self.t0_accept = self.t0_accept.min(best.cost.abs().max(1e-9)).max(t_now);
+            let c = self.rate(d);
+            self.k_accept = ((self.t0_accept / t_now.max(1e-300)).ln() / c)
+                .max(0.0)
+                .powf(d as f64);
+        }
+        StepReport { evaluations }
+    }
+
+    fn best(&self) -> Option<&Evaluated> {
+        self.best.as_ref()
+    }
+
+    fn save(&self) -> serde_json::Value {
+        serde_json::to_value(self).expect("ASA state serialises")
+    }
+}

@@ -1,0 +1,195 @@
+//! Design optimisation (paper §III-B): the objective of Eq. 23 and three optimisers behind one
+//! trait — a genetic algorithm, particle swarm optimisation and adaptive simulated annealing —
+//! driven by a runner that owns budgets, progress, history and checkpoints.
+
+pub mod asa;
+pub mod ga;
+pub mod objective;
+pub mod pso;
+pub mod runner;
+
+pub use objective::{Breakdown, Objective};
+pub use runner::{RunOptions, RunSummary};
+
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// A box-bounded minimisation problem whose evaluations may be random (a planner inside) but
+/// are reproducible: `stream` names the evaluation's random stream.
+pub trait Problem: Sync {
+    /// Lower bounds.
+    fn lower(&self) -> &[f64];
+    /// Upper bounds.
+    fn upper(&self) -> &[f64];
+    /// Cost of `x` (to minimise) and the reachability it reached (1 for problems without one).
+    /// `progress` ∈ [0, 1] is how far the optimisation is (for schedules).
+    fn evaluate(&self, x: &[f64], stream: u64, progress: f64) -> (f64, f64);
+    /// Dimension.
+    fn dim(&self) -> usize {
+        self.lower().len()
+    }
+}
+
+/// A point with its cost.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Evaluated {
+    /// The point.
+    pub x: Vec<f64>,
+    /// Its cost.
+    pub cost: f64,
+    /// Its reachability `R` (1 for problems without one).
+    pub reachability: f64,
+    /// The random stream it was evaluated with (re-evaluating with it gives the same result).
+    pub stream: u64,
+    /// The progress it was evaluated at (for schedules).
+    pub progress: f64,
+}
+
+impl Evaluated {
+    /// True when `self` is strictly better than `other` (lower cost; ties keep the incumbent).
+    pub fn better_than(&self, other: &Evaluated) -> bool {
+        self.cost < other.cost
+    }
+}
+
+/// Evaluates a batch of points in parallel (rayon). Point `i` uses the random stream
+/// `first_stream + i`, so the results do not depend on the number of threads.
+pub fn evaluate_batch(
+    problem: &dyn Problem,
+    xs: Vec<Vec<f64>>,
+    first_stream: u64,
+    progress: f64,
+) -> Vec<Evaluated> {
+    xs.into_par_iter()
+        .enumerate()
+        .map(|(i, x)| {
+            let stream = first_stream + i as u64;
+            let (cost, reachability) = problem.evaluate(&x, stream, progress);
+            Evaluated {
+                x,
+                cost,
+                reachability,
+                stream,
+                progress,
+            }
+        })
+        .collect()
+}
+
+/// What one optimiser step did.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepReport {
+    /// Objective evaluations made in the step.
+    pub evaluations: u64,
+}
+
+/// Everything a step needs from its caller: the problem, a random stream for this step only,
+/// the first evaluation stream to use, and the progress for schedules.
+pub struct StepContext<'a> {
+    /// The problem.
+    pub problem: &'a dyn Problem,
+    /// Random numbers of this step (derived from the seed and the step index by the runner).
+    pub rng: &'a mut ChaCha8Rng,
+    /// Stream of the step's first evaluation; the step uses consecutive streams.
+    pub first_stream: u64,
+    /// Progress ∈ [0, 1].
+    pub progress: f64,
+}
+
+/// An optimiser: it proposes points, has them evaluated (in parallel) and updates its state.
+/// The whole state serialises, so a run can be checkpointed and resumed.
+pub trait Optimizer: Send {
+    /// The algorithm's name (`ga`, `pso`, `asa`).
+    fn name(&self) -> &'static str;
+    /// One generation / iteration.
+    fn step(&mut self, ctx: StepContext<'_>) -> StepReport;
+    /// The best point so far (`None` before the first step).
+    fn best(&self) -> Option<&Evaluated>;
+    /// The state as JSON, for checkpoints.
+    fn save(&self) -> serde_json::Value;
+}
+
+/// Uniform random point in the box.
+pub(crate) fn random_point(lower: &[f64], upper: &[f64], rng: &mut ChaCha8Rng) -> Vec<f64> {
+    use rand::RngExt;
+    lower
+        .iter()
+        .zip(upper)
+        .map(|(&l, &u)| if u > l { rng.random_range(l..=u) } else { l })
+        .collect()
+}
+
+/// The better of two optional incumbents.
+pub(crate) fn keep_best(best: &mut Option<Evaluated>, candidate: &Evaluated) {
+    if best.as_ref().is_none_or(|b| candidate.better_than(b)) {
+        *best = Some(candidate.clone());
+    }
+}
+
+/// Standard test functions for the optimisers (used in tests and documentation).
+pub mod testfn {
+    use super::Problem;
+
+    /// `f(x) = Σ x²` on `[-5.12, 5.12]^n`; minimum 0 at the origin.
+    pub struct Sphere {
+        lower: Vec<f64>,
+        upper: Vec<f64>,
+    }
+
+    impl Sphere {
+        /// In `n` dimensions.
+        pub fn new(n: usize) -> Self {
+            Sphere {
+                lower: vec![-5.12; n],
+                upper: vec![5.12; n],
+            }
+        }
+    }
+
+    impl Problem for Sphere {
+        fn lower(&self) -> &[f64] {
+            &self.lower
+        }
+        fn upper(&self) -> &[f64] {
+            &self.upper
+        }
+        fn evaluate(&self, x: &[f64], _: u64, _: f64) -> (f64, f64) {
+            (x.iter().map(|v| v * v).sum(), 1.0)
+        }
+    }
+
+    /// Rastrigin, `f(x) = 10n + Σ (x² − 10 cos 2πx)` on `[-5.12, 5.12]^n`; minimum 0 at the
+    /// origin, surrounded by a grid of local minima.
+    pub struct Rastrigin {
+        lower: Vec<f64>,
+        upper: Vec<f64>,
+    }
+
+    impl Rastrigin {
+        /// In `n` dimensions.
+        pub fn new(n: usize) -> Self {
+            Rastrigin {
+                lower: vec![-5.12; n],
+                upper: vec![5.12; n],
+            }
+        }
+    }
+
+    impl Problem for Rastrigin {
+        fn lower(&self) -> &[f64] {
+            &self.lower
+        }
+        fn upper(&self) -> &[f64] {
+            &self.upper
+        }
+        fn evaluate(&self, x: &[f64], _: u64, _: f64) -> (f64, f64) {
+            let n = x.len() as f64;
+            let s: f64 = x
+                .iter()
+                .map(|v| v * v - 10.0 * (2.0 * std::f64::consts::PI * v).cos())
+                .sum();
+            (10.0 * n + s, 1.0)
+        }
+    }
+}

@@ -1,0 +1,231 @@
+//! The objective of paper Eq. 23–31: reachability first, then short links, small ranges, few
+//! links and few joints.
+
+use super::Problem;
+use crate::collision::CollisionScene;
+use crate::design::{Design, DesignSpace};
+use crate::planning::{reachability, PlannerConfig, ReachReport};
+use crate::scenario::{ObjectiveWeights, Scenario};
+use nalgebra::Point3;
+use serde::{Deserialize, Serialize};
+use std::sync::Arc;
+
+/// The terms of Eq. 23 for one design.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Breakdown {
+    /// The cost `λ0(1 − R) + Σ_i (λ1·A_i + λ2·B_i + λ3·C_i + λ4·D_i) + λ5·E`.
+    pub cost: f64,
+    /// Reachability `R`.
+    pub reachability: f64,
+    /// `Σ_i A_i`: `atan` of each link's length when `R = 1`, else 1 per link (Eq. 26).
+    pub lengths: f64,
+    /// `Σ_i B_i`: sum over the axes of `atan(max − min)` when `R = 1`, else 1 per link (Eq. 27).
+    pub ranges: f64,
+    /// `Σ_i C_i`: links kept (non-zero length, Eq. 28).
+    pub links_kept: usize,
+    /// `Σ_i D_i`: joints kept (axes with a non-zero range, Eq. 29).
+    pub joints_kept: usize,
+    /// `E`: 1 when some task is unreached (Eq. 30).
+    pub incomplete: f64,
+}
+
+/// Eq. 23–31 for a design whose reachability is `r`.
+///
+/// Reading of the paper where it is terse: the length of link `i` is `|a_i| + |d_i|` (the
+/// paper's `a_i`, with the offset counted for links that have one); `B_i` sums
+/// `atan(max − min)` over link `i`'s six axes; `D_i` counts the axes of link `i` with a
+/// non-zero range (the paper's vector inequality read per axis, as `B_i` is); `A_i = B_i = 1`
+/// when `R < 1`, exactly as Eq. 26–27 state.
+pub fn breakdown(design: &Design, r: f64, w: &ObjectiveWeights) -> Breakdown {
+    let complete = r >= 1.0;
+    let mut lengths = 0.0;
+    let mut ranges = 0.0;
+    let mut links_kept = 0;
+    let mut joints_kept = 0;
+    for l in &design.links {
+        let length = l.a.abs() + l.d.abs();
+        if complete {
+            lengths += length.atan();
+            ranges += l.axes.0.iter().map(|r| r.width().atan()).sum::<f64>();
+        } else {
+            lengths += 1.0;
+            ranges += 1.0;
+        }
+        links_kept += usize::from(length > 0.0);
+        joints_kept += l.joint_count();
+    }
+    let incomplete = if complete { 0.0 } else { 1.0 };
+    let cost = w.lambda0 * (1.0 - r)
+        + w.lambda1 * lengths
+        + w.lambda2 * ranges
+        + w.lambda3 * links_kept as f64
+        + w.lambda4 * joints_kept as f64
+        + w.lambda5 * incomplete;
+    Breakdown {
+        cost,
+        reachability: r,
+        lengths,
+        ranges,
+        links_kept,
+        joints_kept,
+        incomplete,
+    }
+}
+
+/// The design problem: decode a vector, plan, score. Implements [`Problem`] for the
+/// optimisers.
+pub struct Objective {
+    space: DesignSpace,
+    scene: Arc<CollisionScene>,
+    tasks: Vec<Point3<f64>>,
+    planner: PlannerConfig,
+    weights: ObjectiveWeights,
+    seed: u64,
+    lower: Vec<f64>,
+    upper: Vec<f64>,
+}
+
+impl Objective {
+    /// The objective of a scenario, with its planner settings as given (override them on the
+    /// scenario first for `--checker`/`--lmax`).
+    pub fn new(scenario: &Scenario, planner: PlannerConfig, seed: u64) -> Self {
+        Objective {
+            lower: scenario.space.lower(),
+            upper: scenario.space.upper(),
+            space: scenario.space.clone(),
+            scene: Arc::new(CollisionScene::new(&scenario.workspace)),
+            tasks: scenario.workspace.tasks.clone(),
+            planner,
+            weights: scenario.objective.clone(),
+            seed,
+        }
+    }
+
+    /// The design space.
+    pub fn space(&self) -> &DesignSpace {
+        &self.space
+    }
+
+    /// The planner settings at `progress` (schedules applied).
+    pub fn planner_at(&self, progress: f64) -> PlannerConfig {
+        let mut p = self.planner.clone();
+        if let Some(s) = &self.planner.schedule {
+            p.l_max = s.l_max_at(progress);
+            p.max_iterations = s.iterations_at(progress);
+        }
+        p
+    }
+
+    /// Plans for `x` and returns the reachability report and the breakdown of Eq. 23.
+    pub fn evaluate_full(&self, x: &[f64], stream: u64, progress: f64) -> (ReachReport, Breakdown) {
+        let design = self.space.decode(x);
+        let chain = design.chain();
+        let report = reachability(
+            &chain,
+            &self.scene,
+            &self.tasks,
+            &self.planner_at(progress),
+            self.seed,
+            stream,
+        );
+        let b = breakdown(&design, report.reachability, &self.weights);
+        (report, b)
+    }
+}
+
+impl Problem for Objective {
+    fn lower(&self) -> &[f64] {
+        &self.lower
+    }
+    fn upper(&self) -> &[f64] {
+        &self.upper
+    }
+    fn evaluate(&self, x: &[f64], stream: u64, progress: f64) -> (f64, f64) {
+        let (_, b) = self.evaluate_full(x, stream, progress);
+        (b.cost, b.reachability)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::design::{AxisRanges, LinkDesign};
+    use crate::kinematics::{Axis, Placement, Range};
+
+    fn design() -> Design {
+        let mut a1 = AxisRanges::default();
+        *a1.get_mut(Axis::Ry) = Range::new(-1.0, 1.0);
+        *a1.get_mut(Axis::Tx) = Range::new(0.0, 0.5);
+        let mut a3 = AxisRanges::default();
+        *a3.get_mut(Axis::Rz) = Range::new(0.3, 0.3); // fixed: not a joint
+        Design {
+            base: Placement::default(),
+            link_radius: 0.02,
+            colliders_per_link: 2,
+            links: vec![
+                LinkDesign {
+                    a: 0.5,
+                    axes: a1,
+                    ..LinkDesign::default()
+                },
+                LinkDesign::default(), // zero length, no joint: removed
+                LinkDesign {
+                    a: 0.2,
+                    d: 0.1,
+                    axes: a3,
+                    ..LinkDesign::default()
+                },
+            ],
+        }
+    }
+
+    fn weights() -> ObjectiveWeights {
+        ObjectiveWeights {
+            lambda0: 10.0,
+            lambda1: 1.0,
+            lambda2: 0.5,
+            lambda3: 2.0,
+            lambda4: 3.0,
+            lambda5: 7.0,
+        }
+    }
+
+    #[test]
+    fn complete_reachability_uses_arctangents() {
+        let b = breakdown(&design(), 1.0, &weights());
+        let lengths = 0.5f64.atan() + 0.0f64.atan() + 0.3f64.atan();
+        let ranges = 2.0f64.atan() + 0.5f64.atan(); // zero-width axes add atan(0) = 0
+        assert!((b.lengths - lengths).abs() < 1e-15);
+        assert!((b.ranges - ranges).abs() < 1e-15);
+        assert_eq!(b.links_kept, 2);
+        assert_eq!(b.joints_kept, 2);
+        assert_eq!(b.incomplete, 0.0);
+        let cost = 1.0 * lengths + 0.5 * ranges + 2.0 * 2.0 + 3.0 * 2.0;
+        assert!((b.cost - cost).abs() < 1e-12, "{} vs {cost}", b.cost);
+    }
+
+    #[test]
+    fn incomplete_reachability_sets_a_and_b_to_one() {
+        let b = breakdown(&design(), 0.6, &weights());
+        assert_eq!(b.lengths, 3.0, "A_i = 1 for each of the 3 links");
+        assert_eq!(b.ranges, 3.0, "B_i = 1 for each of the 3 links");
+        let cost = 10.0 * 0.4 + 3.0 + 0.5 * 3.0 + 2.0 * 2.0 + 3.0 * 2.0 + 7.0;
+        assert!((b.cost - cost).abs() < 1e-12, "{} vs {cost}", b.cost);
+    }
+
+    #[test]
+    fn removing_a_link_or_a_joint_lowers_the_cost() {
+        let base = breakdown(&design(), 1.0, &weights()).cost;
+        let mut fewer_joints = design();
+        *fewer_joints.links[0].axes.get_mut(Axis::Tx) = Range::ZERO;
+        let b = breakdown(&fewer_joints, 1.0, &weights());
+        assert_eq!(b.joints_kept, 1);
+        assert!((base - b.cost - (3.0 + 0.5 * 0.5f64.atan())).abs() < 1e-12);
+        let mut fewer_links = design();
+        fewer_links.links[2].a = 0.0;
+        fewer_links.links[2].d = 0.0;
+        let b = breakdown(&fewer_links, 1.0, &weights());
+        assert_eq!(b.links_kept, 1);
+        assert!((base - b.cost - (2.0 + 0.3f64.atan())).abs() < 1e-12);
+    }
+}
