@@ -212,11 +212,16 @@ impl Optimizer for Asa {
             let s_max = s.iter().copied().fold(0.0, f64::max);
             if s_max > 0.0 {
                 let c = self.rate(d);
-                for i in 0..d {
-                    let t = self.temperature(self.t0[i], self.k[i], d);
-                    let t_new = (t * s_max / s[i].max(s_max * 1e-6)).min(self.t0[i]);
-                    self.k[i] = ((self.t0[i] / t_new).ln() / c).max(0.0).powf(d as f64);
-                }
+                let new_k: Vec<f64> = s
+                    .iter()
+                    .zip(self.t0.iter().zip(&self.k))
+                    .map(|(&si, (&t0, &k))| {
+                        let t = self.temperature(t0, k, d);
+                        let t_new = (t * s_max / si.max(s_max * 1e-6)).min(t0);
+                        ((t0 / t_new).ln() / c).max(0.0).powf(d as f64)
+                    })
+                    .collect();
+                self.k = new_k;
             }
             // Acceptance: restart from the scale of the best cost, keeping the current time.
             let t_now = self.temperature(self.t0_accept, self.k_accept, d);
