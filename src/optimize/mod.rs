@@ -127,11 +127,18 @@ pub(crate) fn keep_best(best: &mut Option<Evaluated>, candidate: &Evaluated) {
     }
 }
 
-/// Standard test functions for the optimisers (used in tests and documentation).
+/// Standard test functions for the optimisers (used in tests and documentation), shifted so
+/// their minimum is not at the origin (as in the CEC benchmark suites): an optimiser gains
+/// nothing from a bias toward 0 or toward the centre of the box.
 pub mod testfn {
     use super::Problem;
 
-    /// `f(x) = Σ x²` on `[-5.12, 5.12]^n`; minimum 0 at the origin.
+    /// The shift of coordinate `i`: values in [−2.5, 3.5], away from 0 and the box centre.
+    pub fn shift(i: usize) -> f64 {
+        1.234 + 2.2 * ((i as f64) * 2.399).sin()
+    }
+
+    /// `f(x) = Σ (x_i − o_i)²` on `[-5.12, 5.12]^n`; minimum 0 at `o` ([`shift`]).
     pub struct Sphere {
         lower: Vec<f64>,
         upper: Vec<f64>,
@@ -155,12 +162,18 @@ pub mod testfn {
             &self.upper
         }
         fn evaluate(&self, x: &[f64], _: u64, _: f64) -> (f64, f64) {
-            (x.iter().map(|v| v * v).sum(), 1.0)
+            let f = x
+                .iter()
+                .enumerate()
+                .map(|(i, v)| (v - shift(i)).powi(2))
+                .sum();
+            (f, 1.0)
         }
     }
 
-    /// Rastrigin, `f(x) = 10n + Σ (x² − 10 cos 2πx)` on `[-5.12, 5.12]^n`; minimum 0 at the
-    /// origin, surrounded by a grid of local minima.
+    /// Rastrigin, `f(x) = 10n + Σ (z_i² − 10 cos 2πz_i)`, `z = x − o`, on `[-5.12, 5.12]^n`;
+    /// minimum 0 at `o` ([`shift`]), surrounded by a grid of local minima (the nearest at
+    /// about 1 per displaced coordinate).
     pub struct Rastrigin {
         lower: Vec<f64>,
         upper: Vec<f64>,
@@ -187,7 +200,11 @@ pub mod testfn {
             let n = x.len() as f64;
             let s: f64 = x
                 .iter()
-                .map(|v| v * v - 10.0 * (2.0 * std::f64::consts::PI * v).cos())
+                .enumerate()
+                .map(|(i, v)| {
+                    let z = v - shift(i);
+                    z * z - 10.0 * (2.0 * std::f64::consts::PI * z).cos()
+                })
                 .sum();
             (10.0 * n + s, 1.0)
         }

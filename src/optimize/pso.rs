@@ -1,11 +1,30 @@
-//! Particle swarm optimisation with an inertia weight and bounded velocities (Kennedy &
-//! Eberhart 1995; constriction-equivalent coefficients of Clerc & Kennedy 2002).
+//! Particle swarm optimisation with a decreasing inertia weight and bounded velocities
+//! (Kennedy & Eberhart 1995; Shi & Eberhart 1998), in two variants:
+//!
+//! * `comprehensive` (default): comprehensive-learning PSO (Liang, Qin, Suganthan, Baskar,
+//!   IEEE TEC 2006). Each particle learns every coordinate from the personal best of some
+//!   particle (its own, or with probability `Pc_i` the better of two others, chosen anew after
+//!   `refresh` steps without improvement). Slower to collapse onto one basin, so it copes with
+//!   multimodal costs such as Rastrigin's, and the reachability landscape.
+//! * `global`: the classic swarm, pulled toward its own best and the swarm's best.
 
 use super::{
     evaluate_batch, keep_best, random_point, Evaluated, Optimizer, StepContext, StepReport,
 };
 use rand::RngExt;
+use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
+
+/// How particles choose whom to follow.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Learning {
+    /// Comprehensive learning (CLPSO).
+    #[default]
+    Comprehensive,
+    /// Own best and swarm best (gbest).
+    Global,
+}
 
 /// PSO settings (`[optimizer.pso]`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -13,24 +32,35 @@ use serde::{Deserialize, Serialize};
 pub struct PsoParams {
     /// Particles. Default 32.
     pub swarm: usize,
-    /// Inertia weight `w`. Default 0.7298.
+    /// Variant. Default `comprehensive`.
+    pub learning: Learning,
+    /// Inertia weight `w` at the start. Default 0.9.
     pub inertia: f64,
-    /// Pull toward the particle's own best `c1`. Default 1.49618.
+    /// Inertia weight at the end: `w` falls linearly with progress. Default 0.4.
+    pub inertia_end: f64,
+    /// Acceleration toward the exemplar (`comprehensive`) or the own best (`global`).
+    /// Default 1.49445.
     pub cognitive: f64,
-    /// Pull toward the swarm's best `c2`. Default 1.49618.
+    /// Acceleration toward the swarm's best (`global` only). Default 1.49445.
     pub social: f64,
     /// Largest velocity per axis, as a fraction of the axis's range. Default 0.2.
     pub max_velocity: f64,
+    /// Steps without improvement before a particle picks new exemplars (`comprehensive`).
+    /// Default 7.
+    pub refresh: usize,
 }
 
 impl Default for PsoParams {
     fn default() -> Self {
         PsoParams {
             swarm: 32,
-            inertia: 0.7298,
-            cognitive: 1.49618,
-            social: 1.49618,
+            learning: Learning::Comprehensive,
+            inertia: 0.9,
+            inertia_end: 0.4,
+            cognitive: 1.49445,
+            social: 1.49445,
             max_velocity: 0.2,
+            refresh: 7,
         }
     }
 }
@@ -40,6 +70,10 @@ struct Particle {
     x: Vec<f64>,
     v: Vec<f64>,
     best: Evaluated,
+    /// Steps since `best` last improved.
+    stale: usize,
+    /// For each coordinate, the particle whose personal best it learns from.
+    exemplar: Vec<usize>,
 }
 
 /// The swarm's state.
@@ -66,6 +100,56 @@ impl Pso {
     pub fn load(state: serde_json::Value) -> serde_json::Result<Self> {
         serde_json::from_value(state)
     }
+
+    /// CLPSO's learning probability of particle `i` of `n`.
+    fn learning_probability(i: usize, n: usize) -> f64 {
+        if n < 2 {
+            return 0.0;
+        }
+        let t = 10.0 * i as f64 / (n - 1) as f64;
+        0.05 + 0.45 * (t.exp() - 1.0) / (10f64.exp() - 1.0)
+    }
+
+    /// New exemplars for particle `i` (CLPSO): per coordinate, itself or the better of two
+    /// others; at least one coordinate learns from another particle.
+    fn choose_exemplars(&self, i: usize, rng: &mut ChaCha8Rng) -> Vec<usize> {
+        let n = self.particles.len();
+        let dim = self.particles[i].x.len();
+        if n < 2 {
+            return vec![i; dim];
+        }
+        let pc = Self::learning_probability(i, n);
+        let other = |rng: &mut ChaCha8Rng| {
+            let pick = |rng: &mut ChaCha8Rng| {
+                let j = rng.random_range(0..n - 1);
+                if j >= i {
+                    j + 1
+                } else {
+                    j
+                }
+            };
+            let (a, b) = (pick(rng), pick(rng));
+            if self.particles[b].best.better_than(&self.particles[a].best) {
+                b
+            } else {
+                a
+            }
+        };
+        let mut ex: Vec<usize> = (0..dim)
+            .map(|_| {
+                if rng.random::<f64>() < pc {
+                    other(rng)
+                } else {
+                    i
+                }
+            })
+            .collect();
+        if dim > 0 && ex.iter().all(|&e| e == i) {
+            let d = rng.random_range(0..dim);
+            ex[d] = other(rng);
+        }
+        ex
+    }
 }
 
 impl Optimizer for Pso {
@@ -89,19 +173,41 @@ impl Optimizer for Pso {
             }
             xs
         } else {
+            if self.params.learning == Learning::Comprehensive {
+                for i in 0..self.particles.len() {
+                    if self.particles[i].stale >= self.params.refresh
+                        || self.particles[i].exemplar.is_empty()
+                    {
+                        let ex = self.choose_exemplars(i, rng);
+                        self.particles[i].exemplar = ex;
+                        self.particles[i].stale = 0;
+                    }
+                }
+            }
             let g = self
                 .best
                 .as_ref()
                 .expect("a best after the first step")
                 .x
                 .clone();
+            let bests: Vec<Vec<f64>> = self.particles.iter().map(|p| p.best.x.clone()).collect();
             let p = &self.params;
+            let w = p.inertia + (p.inertia_end - p.inertia) * ctx.progress.clamp(0.0, 1.0);
             for particle in &mut self.particles {
                 for i in 0..particle.x.len() {
-                    let (r1, r2): (f64, f64) = (rng.random(), rng.random());
-                    let v = p.inertia * particle.v[i]
-                        + p.cognitive * r1 * (particle.best.x[i] - particle.x[i])
-                        + p.social * r2 * (g[i] - particle.x[i]);
+                    let v = match p.learning {
+                        Learning::Comprehensive => {
+                            let target = bests[particle.exemplar[i]][i];
+                            w * particle.v[i]
+                                + p.cognitive * rng.random::<f64>() * (target - particle.x[i])
+                        }
+                        Learning::Global => {
+                            let (r1, r2): (f64, f64) = (rng.random(), rng.random());
+                            w * particle.v[i]
+                                + p.cognitive * r1 * (particle.best.x[i] - particle.x[i])
+                                + p.social * r2 * (g[i] - particle.x[i])
+                        }
+                    };
                     let v = v.clamp(-vmax[i], vmax[i]);
                     let x = particle.x[i] + v;
                     // At a bound the particle stops there and loses that velocity component.
@@ -135,6 +241,8 @@ impl Optimizer for Pso {
                     x: e.x.clone(),
                     v,
                     best: e,
+                    stale: 0,
+                    exemplar: Vec::new(),
                 });
             }
         } else {
@@ -142,6 +250,9 @@ impl Optimizer for Pso {
                 keep_best(&mut self.best, &e);
                 if e.better_than(&particle.best) {
                     particle.best = e;
+                    particle.stale = 0;
+                } else {
+                    particle.stale += 1;
                 }
             }
         }
