@@ -72,6 +72,25 @@ enum Command {
         #[arg(long)]
         quiet: bool,
     },
+    /// Reproduce the paper's experiments: §IV-A (paper-2d: GA, PSO, ASA with segment at π/4
+    /// against the ASA + discrete π/40 baseline) or §IV-B (paper-3d: GA), averaged over random
+    /// workspaces.
+    Experiment {
+        /// paper-2d or paper-3d.
+        preset: Preset,
+        /// Number of random workspaces.
+        #[arg(long, default_value_t = 10)]
+        runs: usize,
+        /// Seconds per run (runs that converge stop earlier).
+        #[arg(long, default_value_t = 60.0)]
+        time_limit: f64,
+        /// Seed of the first workspace (the others follow).
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// Output directory.
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// Reachability of a design: the share of task points an RRT from home reaches.
     Reach {
         /// The scenario file (TOML).
@@ -272,6 +291,56 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
                 summary.elapsed_s,
                 summary.stopped
             );
+        }
+        Command::Experiment {
+            preset: p,
+            runs,
+            time_limit,
+            seed,
+            out,
+        } => {
+            use kinsynth::optimize::experiment::{median, methods, run_experiment};
+            if !(time_limit.is_finite() && time_limit > 0.0) {
+                return Err(kinsynth::Error::invalid(
+                    "--time-limit",
+                    time_limit,
+                    "must be positive and finite",
+                ));
+            }
+            let records = run_experiment(p, runs, time_limit, seed, &out, &mut |line| {
+                eprintln!("{line}")
+            })?;
+            println!(
+                "{} runs of {} s written to {}",
+                records.len(),
+                time_limit,
+                out.display()
+            );
+            for (k, m) in methods(p).iter().enumerate() {
+                let mine: Vec<_> = records.iter().filter(|r| r.method == k).collect();
+                let times: Vec<f64> = mine.iter().filter_map(|r| r.time_to_full_reach()).collect();
+                let reached = times.len();
+                let med = |f: fn(&kinsynth::optimize::RunSummary) -> f64| {
+                    median(mine.iter().map(|r| f(&r.summary)).collect()).unwrap_or(f64::NAN)
+                };
+                println!(
+                    "  {:<32} R = 1 in {reached}/{} runs, median time to R = 1: {}; median final R {:.2}, links {:.1}, joints {:.1}",
+                    m.label,
+                    mine.len(),
+                    if reached * 2 > mine.len() {
+                        // The median over all runs exists when more than half reached R = 1
+                        // (the others count as later than the budget).
+                        let mut all: Vec<f64> = times.clone();
+                        all.extend(std::iter::repeat_n(f64::INFINITY, mine.len() - reached));
+                        format!("{:.2} s", median(all).unwrap_or(f64::NAN))
+                    } else {
+                        format!("> {time_limit} s")
+                    },
+                    med(|s| s.reachability),
+                    med(|s| s.links_kept as f64),
+                    med(|s| s.joints_kept as f64),
+                );
+            }
         }
         Command::Reach {
             file,

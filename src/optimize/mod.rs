@@ -3,6 +3,7 @@
 //! driven by a runner that owns budgets, progress, history and checkpoints.
 
 pub mod asa;
+pub mod experiment;
 pub mod ga;
 pub mod objective;
 pub mod pso;

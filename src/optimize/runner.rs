@@ -45,6 +45,10 @@ pub struct HistoryRow {
     pub best_cost: f64,
     /// Reachability of the best design so far.
     pub best_reachability: f64,
+    /// Links kept by the best design so far.
+    pub best_links: usize,
+    /// Joints kept by the best design so far.
+    pub best_joints: usize,
 }
 
 /// Everything needed to continue a run where it stopped.
@@ -305,11 +309,14 @@ impl<'a> Runner<'a> {
             } else {
                 stale += 1;
             }
+            let best_design = objective.space().decode(&best.x);
             let row = HistoryRow {
                 elapsed_s: elapsed(),
                 evaluations,
                 best_cost: best.cost,
                 best_reachability: best.reachability,
+                best_links: best_design.links_kept(),
+                best_joints: best_design.joints_kept(),
             };
             observer.generation(&row);
             history.push(row);
