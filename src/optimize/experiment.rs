@@ -93,6 +93,9 @@ impl RunRecord {
     }
 }
 
+/// Reads one quantity off a history row.
+type Metric = fn(&HistoryRow) -> f64;
+
 /// The value of a step-function history at time `t` (the last row at or before `t`).
 fn at(history: &[HistoryRow], t: f64, f: fn(&HistoryRow) -> f64) -> Option<f64> {
     history.iter().rev().find(|r| r.elapsed_s <= t).map(f)
@@ -209,7 +212,7 @@ fn write_tables(
     // Averaged curves on a grid of 100 instants; a run that has not finished its first
     // generation at `t` contributes R = 0 (nothing known yet).
     let grid: Vec<f64> = (0..=100).map(|i| time_limit * i as f64 / 100.0).collect();
-    let metrics: [(&str, fn(&HistoryRow) -> f64); 4] = [
+    let metrics: [(&str, Metric); 4] = [
         ("reachability", |r| r.best_reachability),
         ("cost", |r| r.best_cost),
         ("links", |r| r.best_links as f64),
