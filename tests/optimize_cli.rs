@@ -1,0 +1,169 @@
+//! `kinsynth optimize` through the command line: outputs, resume after a kill, Ctrl-C.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+const BIN: &str = env!("CARGO_BIN_EXE_kinsynth");
+
+fn scenario() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scenarios/paper-2d.toml")
+}
+
+fn optimize(out: &Path, extra: &[&str]) -> Command {
+    let mut c = Command::new(BIN);
+    c.arg("optimize")
+        .arg(scenario())
+        .args(["--seed", "3", "--quiet", "--out"])
+        .arg(out)
+        .args(extra);
+    c
+}
+
+/// best.json without the wall-clock fields.
+fn best_without_time(dir: &Path) -> serde_json::Value {
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("best.json")).unwrap()).unwrap();
+    v.as_object_mut().unwrap().remove("elapsed_s");
+    v
+}
+
+fn generations_in_checkpoint(dir: &Path) -> usize {
+    std::fs::read_to_string(dir.join("checkpoint.json"))
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+        .and_then(|v| v["generation"].as_u64())
+        .unwrap_or(0) as usize
+}
+
+#[test]
+fn writes_every_output_with_the_documented_shape() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let o = optimize(&out, &["--evaluations", "96"]).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let best: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("best.json")).unwrap()).unwrap();
+    for key in [
+        "design",
+        "cost",
+        "reachability",
+        "links_kept",
+        "joints_kept",
+        "evaluations",
+        "elapsed_s",
+        "seed",
+        "optimizer",
+        "checker",
+    ] {
+        assert!(best.get(key).is_some(), "best.json lacks {key}");
+    }
+    assert_eq!(best["optimizer"], "ga");
+    let history = std::fs::read_to_string(out.join("history.csv")).unwrap();
+    let mut lines = history.lines();
+    assert_eq!(
+        lines.next(),
+        Some("elapsed_s,evaluations,best_cost,best_reachability")
+    );
+    // Whole generations: 32 first, then 30 (two elites carried over): 32, 62, 92, 122.
+    let rows: Vec<&str> = lines.collect();
+    assert_eq!(rows.len(), 4, "one row per generation");
+    assert_eq!(rows.last().unwrap().split(',').nth(1), Some("122"));
+    assert_eq!(best["evaluations"], 122);
+    let reach: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("reach.json")).unwrap()).unwrap();
+    assert_eq!(reach["reachability"], best["reachability"]);
+    assert!(std::fs::read_to_string(out.join("convergence.svg"))
+        .unwrap()
+        .starts_with("<svg"));
+    // best.json is accepted by `reach --design`, and gives the same R with the same stream.
+    let o = Command::new(BIN)
+        .args(["reach", "--design"])
+        .arg(out.join("best.json"))
+        .arg(scenario())
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // The baseline flag selects ASA with node-only checks at π/40.
+    let base = dir.path().join("baseline");
+    let o = optimize(&base, &["--baseline", "--evaluations", "32"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let b = best_without_time(&base);
+    assert_eq!(b["optimizer"], "asa");
+    assert_eq!(b["checker"], "discrete");
+    assert!((b["l_max"].as_f64().unwrap() - std::f64::consts::PI / 40.0).abs() < 1e-12);
+}
+
+#[test]
+fn a_killed_run_resumes_to_the_same_result() {
+    let dir = tempfile::tempdir().unwrap();
+    let whole = dir.path().join("whole");
+    let budget = ["--evaluations", "320", "--checkpoint-interval", "0"];
+    let o = optimize(&whole, &budget).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+
+    let killed = dir.path().join("killed");
+    let mut child = optimize(&killed, &budget)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while generations_in_checkpoint(&killed) < 3 {
+        assert!(start.elapsed() < Duration::from_secs(120), "no checkpoint");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let at_kill = generations_in_checkpoint(&killed);
+    assert!(
+        at_kill < 10,
+        "killed before the end (generation {at_kill} of 10)"
+    );
+
+    let o = Command::new(BIN)
+        .args(["optimize", "--quiet", "--resume"])
+        .arg(&killed)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(best_without_time(&killed), best_without_time(&whole));
+    let rows = |d: &Path| {
+        std::fs::read_to_string(d.join("history.csv"))
+            .unwrap()
+            .lines()
+            .count()
+    };
+    assert_eq!(rows(&killed), rows(&whole));
+}
+
+#[test]
+fn ctrl_c_writes_the_best_design_so_far() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("interrupted");
+    let mut child = optimize(&out, &["--time-limit", "600", "--checkpoint-interval", "0"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while generations_in_checkpoint(&out) < 1 {
+        assert!(start.elapsed() < Duration::from_secs(120), "no checkpoint");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    let status = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let exit = child.wait().unwrap();
+    assert!(
+        exit.success(),
+        "a Ctrl-C run ends cleanly after writing its results"
+    );
+    let best = best_without_time(&out);
+    assert_eq!(best["stopped"], "interrupted");
+    assert!(best["design"]["links"].as_array().unwrap().len() == 8);
+}
