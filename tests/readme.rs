@@ -52,8 +52,21 @@ fn setup_commands_are_the_ones_ci_runs() {
     let ci =
         std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(".ci/run")).unwrap();
     assert!(ci.lines().any(|l| l.trim() == "cargo test"));
-    // The main-job command names a bundled scenario that exists.
-    let scenario = sh[0].split_whitespace().last().unwrap();
+    // The main-job command optimises a bundled scenario that exists, with a budget under a
+    // minute.
+    assert!(sh[0].contains(" optimize "));
+    let scenario = sh[0]
+        .split_whitespace()
+        .find(|w| w.ends_with(".toml"))
+        .unwrap();
+    let limit: f64 = sh[0]
+        .split_whitespace()
+        .skip_while(|w| *w != "--time-limit")
+        .nth(1)
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(limit < 60.0);
     assert!(Path::new(env!("CARGO_MANIFEST_DIR"))
         .join(scenario)
         .exists());
