@@ -130,6 +130,30 @@ enum Command {
     },
 }
 
+/// Applies `--checker` and `--lmax` to the scenario's planner settings (a given `L_max`
+/// replaces any schedule).
+fn override_planner(
+    planner: &mut kinsynth::planning::PlannerConfig,
+    checker: Option<kinsynth::collision::CheckerKind>,
+    lmax: Option<f64>,
+) -> Result<(), kinsynth::Error> {
+    if let Some(c) = checker {
+        planner.checker = c;
+    }
+    if let Some(l) = lmax {
+        if !(l.is_finite() && l > 0.0) {
+            return Err(kinsynth::Error::invalid(
+                "--lmax",
+                l,
+                "must be positive and finite",
+            ));
+        }
+        planner.l_max = l;
+        planner.schedule = None;
+    }
+    Ok(())
+}
+
 fn run(cli: Cli) -> Result<(), kinsynth::Error> {
     match cli.command {
         Command::Scenario {
@@ -229,20 +253,7 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
                     if let Some(a) = optimizer {
                         algorithm = a;
                     }
-                    if let Some(c) = checker {
-                        planner.checker = c;
-                    }
-                    if let Some(l) = lmax {
-                        if !(l.is_finite() && l > 0.0) {
-                            return Err(kinsynth::Error::invalid(
-                                "--lmax",
-                                l,
-                                "must be positive and finite",
-                            ));
-                        }
-                        planner.l_max = l;
-                        planner.schedule = None;
-                    }
+                    override_planner(&mut planner, checker, lmax)?;
                     let options = RunOptions {
                         algorithm,
                         seed: seed.unwrap_or(s.seed),
@@ -356,19 +367,7 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
                 None => s.space.largest(),
             };
             let mut planner = s.planner.clone();
-            if let Some(c) = checker {
-                planner.checker = c;
-            }
-            if let Some(l) = lmax {
-                if !(l.is_finite() && l > 0.0) {
-                    return Err(kinsynth::Error::invalid(
-                        "--lmax",
-                        l,
-                        "must be positive and finite",
-                    ));
-                }
-                planner.l_max = l;
-            }
+            override_planner(&mut planner, checker, lmax)?;
             let seed = seed.unwrap_or(s.seed);
             let chain = design.chain();
             let scene = std::sync::Arc::new(kinsynth::collision::CollisionScene::new(&s.workspace));

@@ -71,6 +71,26 @@ fn check(
     }
 }
 
+/// `v` must be positive and finite.
+fn check_positive(v: f64, field: impl Into<String>) -> Result<()> {
+    check(
+        v.is_finite() && v > 0.0,
+        field,
+        v,
+        "must be positive and finite",
+    )
+}
+
+/// `v` must be finite and not negative.
+fn check_non_negative(v: f64, field: impl Into<String>) -> Result<()> {
+    check(
+        v.is_finite() && v >= 0.0,
+        field,
+        v,
+        "must be finite and not negative",
+    )
+}
+
 fn check_param(p: &ParamSpec, field: &str) -> Result<()> {
     match *p {
         ParamSpec::Fixed(v) => check(v.is_finite(), field, v, "must be finite"),
@@ -149,24 +169,9 @@ impl Scenario {
         let space = Self::design_space(spec)?;
         let workspace = Self::workspace(spec, dir)?;
         let p = &spec.planner;
-        check(
-            p.l_max.is_finite() && p.l_max > 0.0,
-            "planner.l_max",
-            p.l_max,
-            "must be positive and finite",
-        )?;
-        check(
-            p.lambda.is_finite() && p.lambda >= 0.0,
-            "planner.lambda",
-            p.lambda,
-            "must be finite and not negative",
-        )?;
-        check(
-            p.goal_tolerance.is_finite() && p.goal_tolerance > 0.0,
-            "planner.goal_tolerance",
-            p.goal_tolerance,
-            "must be positive and finite",
-        )?;
+        check_positive(p.l_max, "planner.l_max")?;
+        check_non_negative(p.lambda, "planner.lambda")?;
+        check_positive(p.goal_tolerance, "planner.goal_tolerance")?;
         check(
             p.max_iterations > 0,
             "planner.max_iterations",
@@ -180,20 +185,10 @@ impl Scenario {
             "must lie in [0, 1]",
         )?;
         if let Some(t) = p.time_limit {
-            check(
-                t.is_finite() && t > 0.0,
-                "planner.time_limit",
-                t,
-                "must be positive",
-            )?;
+            check_positive(t, "planner.time_limit")?;
         }
         for (i, w) in spec.objective.as_array().into_iter().enumerate() {
-            check(
-                w.is_finite() && w >= 0.0,
-                format!("objective.lambda{i}"),
-                w,
-                "must be finite and not negative",
-            )?;
+            check_non_negative(w, format!("objective.lambda{i}"))?;
         }
         let o = &spec.optimizer;
         check(
@@ -203,12 +198,7 @@ impl Scenario {
             "must be at least 2",
         )?;
         if let Some(t) = o.time_limit {
-            check(
-                t.is_finite() && t > 0.0,
-                "optimizer.time_limit",
-                t,
-                "must be positive",
-            )?;
+            check_positive(t, "optimizer.time_limit")?;
         }
         if let Some(n) = o.evaluations {
             check(n > 0, "optimizer.evaluations", n, "must be at least 1")?;
@@ -228,18 +218,8 @@ impl Scenario {
     fn design_space(spec: &ScenarioSpec) -> Result<DesignSpace> {
         let r = &spec.robot;
         check(r.links >= 1, "robot.links", r.links, "must be at least 1")?;
-        check(
-            r.link_radius.is_finite() && r.link_radius >= 0.0,
-            "robot.link_radius",
-            r.link_radius,
-            "must be finite and not negative",
-        )?;
-        check(
-            r.snap.is_finite() && r.snap >= 0.0,
-            "robot.snap",
-            r.snap,
-            "must be finite and not negative",
-        )?;
+        check_non_negative(r.link_radius, "robot.link_radius")?;
+        check_non_negative(r.snap, "robot.snap")?;
         check(
             r.base.is_finite(),
             "robot.base",
@@ -377,12 +357,7 @@ impl Scenario {
     }
 
     fn workspace(spec: &ScenarioSpec, dir: &Path) -> Result<Workspace> {
-        check(
-            spec.clearance.is_finite() && spec.clearance >= 0.0,
-            "clearance",
-            spec.clearance,
-            "must be finite and not negative",
-        )?;
+        check_non_negative(spec.clearance, "clearance")?;
         let mut obstacles = Vec::with_capacity(spec.obstacle.len());
         for (k, o) in spec.obstacle.iter().enumerate() {
             obstacles.push(Self::obstacle(k, o, dir)?);

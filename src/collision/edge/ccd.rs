@@ -96,12 +96,8 @@ impl EdgeChecker for Ccd {
             stats,
             ..
         } = scratch;
-        work.delta.clear();
-        work.delta.extend(to.iter().zip(from).map(|(b, a)| b - a));
+        work.prepare(bounds, from, to);
         let n = substeps(chain, &work.delta);
-        work.reach.clear();
-        work.reach
-            .extend((0..bounds.segments()).map(|s| bounds.displacement(s, &work.delta)));
         stats.fk += 1;
         chain.fk(from, fa);
         for i in 0..n {

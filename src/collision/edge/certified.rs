@@ -121,6 +121,19 @@ pub(crate) struct Work {
     stack: Vec<Interval>,
 }
 
+impl Work {
+    /// Fills `delta` with `to − from` and `reach` with each segment's displacement bound for
+    /// the whole step.
+    pub(crate) fn prepare(&mut self, bounds: &MotionBounds, from: &[f64], to: &[f64]) {
+        self.delta.clear();
+        self.delta.extend(to.iter().zip(from).map(|(b, a)| b - a));
+        self.reach.clear();
+        let delta = &self.delta;
+        self.reach
+            .extend((0..bounds.segments()).map(|s| bounds.displacement(s, delta)));
+    }
+}
+
 /// The certified checker: conservative advancement over the link capsules.
 #[derive(Clone, Debug)]
 pub struct Certified {
@@ -159,11 +172,7 @@ impl EdgeChecker for Certified {
             near,
             ..
         } = scratch;
-        work.delta.clear();
-        work.delta.extend(to.iter().zip(from).map(|(b, a)| b - a));
-        work.reach.clear();
-        work.reach
-            .extend((0..bounds.segments()).map(|s| bounds.displacement(s, &work.delta)));
+        work.prepare(bounds, from, to);
         work.pairs.clear();
         work.stack.clear();
 
