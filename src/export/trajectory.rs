@@ -6,8 +6,9 @@
 //! (Euclidean over all joints, radians and metres alike), so `t` runs from 0 at home to 1 at the
 //! task. The ROS form (`trajectory_msgs/JointTrajectory`) scales `t` to seconds at
 //! [`SECONDS_PER_UNIT`] per unit of path length: `time_from_start = t · s_N · SECONDS_PER_UNIT`
-//! (1 s per radian, or per metre). A path whose points all coincide (a task reached at home)
-//! spreads its points evenly over `t` and lasts 0 s.
+//! (1 s per radian, or per metre). A path whose points all coincide spreads its points evenly
+//! over `t` and lasts 0 s; a one-point path (a task reached by the home node itself) is a single
+//! row at `t = 0`.
 //!
 //! Files per reached task `i`: `task_{i}.csv` (header `t,{joint names…}`, one row per path
 //! point) and `task_{i}.json` (`joint_names`, `points[].positions`, `points[].time_from_start`
@@ -230,6 +231,44 @@ mod tests {
         let tr = Trajectory::from_path(&p);
         assert_eq!(tr.t, vec![0.0, 1.0]);
         assert_eq!(tr.duration(), 0.0);
+        let one = PathReport {
+            joint_names: vec!["a".into()],
+            points: vec![vec![0.5]],
+        };
+        let tr = Trajectory::from_path(&one);
+        assert_eq!(tr.to_csv(), "t,a\n0,0.5\n");
+    }
+
+    #[test]
+    fn only_reached_tasks_get_files() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = |index, path: Option<PathReport>| crate::planning::TargetReport {
+            index,
+            point: [0.0; 3],
+            reached: path.is_some(),
+            end_effector: [0.0; 3],
+            error: 0.0,
+            path,
+        };
+        let report = ReachReport {
+            reachability: 0.5,
+            checker: "segment".into(),
+            l_max: 1.0,
+            seed: 0,
+            iterations: 0,
+            nodes: 0,
+            node_checks: 0,
+            edge_checks: 0,
+            home_blocked: None,
+            targets: vec![target(0, None), target(1, Some(path()))],
+        };
+        let out = dir.path().join("deep/traj");
+        let files = write_trajectories(&report, &out).unwrap();
+        assert_eq!(files, vec![out.join("task_1.csv"), out.join("task_1.json")]);
+        let back: RosJointTrajectory =
+            serde_json::from_str(&std::fs::read_to_string(&files[1]).unwrap()).unwrap();
+        assert_eq!(back, Trajectory::from_path(&path()).to_ros());
+        assert!(!out.join("task_0.csv").exists());
     }
 
     #[test]

@@ -30,7 +30,7 @@
 //! capsule per axis, a polyline where the planner has one straight slider.
 
 use crate::design::Design;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::kinematics::{Axis, Range};
 use nalgebra::{IsometryMatrix3, Point3, Rotation3, Translation3, Unit, Vector3};
 use std::path::Path;
@@ -369,12 +369,7 @@ pub fn write_urdf(design: &Design, path: &Path) -> Result<()> {
         .and_then(|s| s.to_str())
         .filter(|s| !s.is_empty())
         .unwrap_or("kinsynth_robot");
-    crate::io::write_atomic(path, design_to_urdf_string(design, name).as_bytes()).map_err(|e| {
-        match e {
-            e @ Error::Write { .. } => e,
-            other => other.in_file(path),
-        }
-    })
+    crate::io::write_atomic(path, design_to_urdf_string(design, name).as_bytes())
 }
 
 #[cfg(test)]
