@@ -902,3 +902,61 @@ fn ur5_cell_is_evaluated_through_the_cli() {
     assert!(!err.contains("warning"), "{err}");
     eprintln!("ur5-cell check: {out}");
 }
+
+#[test]
+fn base_and_tip_frames_cut_the_chain() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(dir.path(), "general.urdf", GENERAL);
+    let imported = load_chain(&path, Some("base"), Some("l4"), Some(0.02), 4).unwrap();
+    assert_eq!(imported.joint_names, ["turn", "skew", "slide"]);
+    assert_eq!(imported.radius, 0.02);
+    // The base frame keeps its pose in the root: the mount's offset and yaw.
+    let mount = IsometryMatrix3::from_parts(
+        Translation3::new(0.0, 0.0, 0.1),
+        Rotation3::from_euler_angles(0.0, 0.0, 0.5),
+    );
+    assert!(iso_err(imported.chain.base(), &mount) < 1e-15);
+    let kc = k::Chain::<f64>::from_urdf_file(&path).unwrap();
+    let l4 = kc.find_link("l4").unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(2);
+    for _ in 0..100 {
+        let q = random_config(&imported.chain, &mut rng);
+        for (n, v) in imported.joint_names.iter().zip(&q) {
+            kc.find(n).unwrap().set_joint_position_unchecked(*v);
+        }
+        kc.update_transforms();
+        let t = from_k(&l4.world_transform().unwrap());
+        let ee = imported.chain.end_effector(&q);
+        assert!((t.translation.vector - ee.coords).amax() < 1e-12);
+    }
+    // A tip that is not below the base.
+    let e = load_chain(&path, Some("l2"), Some("base"), None, 4)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("tip frame 'base'") && e.contains("not below the base frame 'l2'"),
+        "{e}"
+    );
+    // Through the command line, on the bundled UR5 cut at its wrist.
+    let (ok, out, err) = kinsynth(&[
+        "reach",
+        "examples/scenarios/ur5-cell.toml",
+        "--urdf",
+        "examples/robots/ur5.urdf",
+        "--base-frame",
+        "link0",
+        "--tip-frame",
+        "link5",
+        "--radius",
+        "0.04",
+    ]);
+    assert!(ok, "{err}");
+    assert!(out.starts_with("R = "), "{out}");
+    let (ok, _, err) = kinsynth(&[
+        "reach",
+        "examples/scenarios/ur5-cell.toml",
+        "--tip-frame",
+        "x",
+    ]);
+    assert!(!ok && err.contains("--urdf"), "{err}");
+}
