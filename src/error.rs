@@ -70,6 +70,15 @@ pub enum Error {
         #[source]
         source: crate::world::mesh::MeshError,
     },
+    /// A URDF robot cannot be used as a serial chain: an unsupported joint type, a branch or a
+    /// cycle between base and tip, a missing frame, a bad limit.
+    #[error("{element}: {reason}")]
+    Urdf {
+        /// The joint or link concerned, e.g. `joint 'elbow' (parent 'upper_arm', child 'forearm')`.
+        element: String,
+        /// What is wrong with it.
+        reason: String,
+    },
     /// An error found while processing a particular file.
     #[error("{}: {source}", file.display())]
     InFile {

@@ -5,6 +5,7 @@ pub mod collision;
 pub mod design;
 pub mod error;
 pub mod export;
+pub mod import;
 pub mod io;
 pub mod kinematics;
 pub mod optimize;

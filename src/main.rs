@@ -110,6 +110,16 @@ enum Command {
         /// Write the report as JSON to this file (atomically).
         #[arg(long)]
         json: Option<PathBuf>,
+        #[command(flatten)]
+        urdf: UrdfReach,
+    },
+    /// Export a design (design JSON or best.json) as a URDF robot.
+    Urdf {
+        /// The design JSON, or an optimiser's best.json.
+        design: PathBuf,
+        /// Output URDF file (written atomically); the robot is named after its stem.
+        #[arg(short, long)]
+        output: PathBuf,
     },
     /// Compare the four edge checkers with the dense-sampling oracle on random edges.
     Edges {
@@ -152,6 +162,27 @@ fn override_planner(
         planner.schedule = None;
     }
     Ok(())
+}
+
+/// `reach` options for evaluating an existing URDF robot and writing trajectories.
+#[derive(clap::Args)]
+struct UrdfReach {
+    /// Evaluate this URDF robot instead of a design (see the README's "URDF" section).
+    #[arg(long, conflicts_with = "design")]
+    urdf: Option<PathBuf>,
+    /// URDF link where the chain starts. Default: the root link.
+    #[arg(long, requires = "urdf")]
+    base_frame: Option<String>,
+    /// URDF link whose origin is the end effector. Default: the leaf below the base.
+    #[arg(long, requires = "urdf")]
+    tip_frame: Option<String>,
+    /// Capsule radius of the URDF robot's links (m). Default: the largest radius of its
+    /// collision cylinders and spheres, else 0.05.
+    #[arg(long, requires = "urdf")]
+    radius: Option<f64>,
+    /// Write task_{index}.csv and task_{index}.json for every reached task into this directory.
+    #[arg(long)]
+    trajectories: Option<PathBuf>,
 }
 
 fn run(cli: Cli) -> Result<(), kinsynth::Error> {
@@ -360,19 +391,31 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
             lmax,
             seed,
             json,
+            urdf,
         } => {
             let s = Scenario::load(&file)?;
-            let design = match design {
-                Some(p) => kinsynth::Design::load(&p)?,
-                None => s.space.largest(),
+            let (chain, urdf_names) = match &urdf.urdf {
+                Some(p) => {
+                    let r = kinsynth::import::load_chain(
+                        p,
+                        urdf.base_frame.as_deref(),
+                        urdf.tip_frame.as_deref(),
+                        urdf.radius,
+                        s.space.template().colliders_per_link,
+                    )?;
+                    (r.chain, Some(r.joint_names))
+                }
+                None => match design {
+                    Some(p) => (kinsynth::Design::load(&p)?.chain(), None),
+                    None => (s.space.largest().chain(), None),
+                },
             };
             let mut planner = s.planner.clone();
             override_planner(&mut planner, checker, lmax)?;
             let seed = seed.unwrap_or(s.seed);
-            let chain = design.chain();
             let scene = std::sync::Arc::new(kinsynth::collision::CollisionScene::new(&s.workspace));
             let start = std::time::Instant::now();
-            let report = kinsynth::planning::reachability(
+            let mut report = kinsynth::planning::reachability(
                 &chain,
                 &scene,
                 &s.workspace.tasks,
@@ -381,6 +424,9 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
                 0,
             );
             let elapsed = start.elapsed();
+            if let Some(names) = &urdf_names {
+                kinsynth::import::urdf::rename_joints(&mut report, names);
+            }
             println!(
                 "R = {:.3} ({} of {} tasks) with {} at L_max {:.4}, seed {seed}: {} iterations, {} nodes, {} edge checks, {:.1} ms",
                 report.reachability,
@@ -410,6 +456,24 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
             if let Some(path) = json {
                 kinsynth::io::write_atomic(&path, report.to_json().as_bytes())?;
             }
+            if let Some(dir) = &urdf.trajectories {
+                let files = kinsynth::export::trajectory::write_trajectories(&report, dir)?;
+                println!(
+                    "wrote {} trajectory files to {}",
+                    files.len(),
+                    dir.display()
+                );
+            }
+        }
+        Command::Urdf { design, output } => {
+            let d = kinsynth::Design::load(&design)?;
+            kinsynth::export::write_urdf(&d, &output)?;
+            println!(
+                "wrote {} ({} links, {} joints)",
+                output.display(),
+                d.links.len(),
+                d.joints_kept()
+            );
         }
         Command::Edges {
             file,

@@ -76,6 +76,17 @@ fn writes_every_output_with_the_documented_shape() {
     assert!(std::fs::read_to_string(out.join("convergence.svg"))
         .unwrap()
         .starts_with("<svg"));
+    let urdf = std::fs::read_to_string(out.join("robot.urdf")).unwrap();
+    assert!(urdf.contains("<robot") && urdf.contains("j2_ry"));
+    // A trajectory pair per reached task.
+    let reached = reach["targets"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|t| t["reached"].as_bool().unwrap())
+        .count();
+    let files = std::fs::read_dir(out.join("trajectories")).unwrap().count();
+    assert_eq!(files, 2 * reached);
     // best.json is accepted by `reach --design`, and gives the same R with the same stream.
     let o = Command::new(BIN)
         .args(["reach", "--design"])

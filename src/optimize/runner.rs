@@ -156,6 +156,10 @@ pub mod files {
     pub const PLOT: &str = "convergence.svg";
     /// The state for `--resume`.
     pub const CHECKPOINT: &str = "checkpoint.json";
+    /// The best design as a URDF robot.
+    pub const URDF: &str = "robot.urdf";
+    /// Folder of the joint trajectories of the best design, one pair of files per reached task.
+    pub const TRAJECTORIES: &str = "trajectories";
 }
 
 /// Observes a run: called after every generation (for progress displays).
@@ -217,7 +221,8 @@ impl<'a> Runner<'a> {
 
     /// Runs until a budget is spent, the run converges (`R = 1` and no improvement for
     /// `patience` generations) or `stop` is raised (Ctrl-C); then writes `best.json`,
-    /// `history.csv`, `reach.json`, `convergence.svg` and a final checkpoint. With `resume`,
+    /// `history.csv`, `reach.json`, `convergence.svg`, `robot.urdf`, `trajectories/` and a
+    /// final checkpoint. With `resume`,
     /// continues from that checkpoint: for the same seed and an evaluation budget, the result
     /// equals that of an uninterrupted run.
     pub fn run(
@@ -399,6 +404,8 @@ impl<'a> Runner<'a> {
         let best = serde_json::to_string_pretty(summary).expect("a summary serialises");
         write_atomic(&self.out.join(files::BEST), best.as_bytes())?;
         write_atomic(&self.out.join(files::REACH), report.to_json().as_bytes())?;
+        crate::export::write_urdf(&summary.design, &self.out.join(files::URDF))?;
+        crate::export::trajectory::write_trajectories(report, &self.out.join(files::TRAJECTORIES))?;
         let mut csv = String::from("elapsed_s,evaluations,best_cost,best_reachability\n");
         for r in history {
             csv.push_str(&format!(

@@ -1,0 +1,541 @@
+//! Existing serial robots from URDF, as kinsynth [`Chain`]s that the planner can evaluate.
+//!
+//! Rules (see also the README's "URDF" section):
+//!
+//! - The URDF's root link is the scenario's world frame. The chain runs from the base frame
+//!   (`--base-frame`, default the root) to the tip frame (`--tip-frame`, default the one leaf
+//!   below the base; a link with two child joints on the way is an error). The chain's base pose
+//!   `F_0` is the base frame's pose in the root (joints above the base taken at zero), moved on
+//!   through the leading fixed joints whose child link has no `<collision>`.
+//! - Supported joints: `revolute`, `prismatic` (limits from `<limit>`, which must be finite with
+//!   `lower < upper`), `continuous` (range `[−π, π]`) and `fixed`. `floating`, `planar`,
+//!   `spherical` and `mimic` joints are errors.
+//! - Each moving joint is a link of the chain: a fixed transform (the fixed joints since the
+//!   previous moving joint, folded together, then the joint's origin) and one free axis. An axis
+//!   along +x, +y or +z maps to that axis (`Rx`…`Tz`); any other axis is turned onto local z by
+//!   a rotation `A` appended to the fixed transform (free axis `Rz` or `Tz`), and `A⁻¹` is
+//!   prepended to the next fixed transform. A moving joint whose origin is the identity, directly
+//!   after another one, with both axes along +x, +y or +z and in the order of paper Eq. 2, joins
+//!   that joint's link instead (so a kinsynth export imports with the design's own links).
+//! - Trailing fixed joints up to the tip become a last link without axes (the tip's origin is
+//!   the end effector), unless they are the identity.
+//! - Body: each link is the polyline from the previous frame's origin to its joint origin. When
+//!   the `<collision>` cylinders (or capsules) of the links rigidly attached to the previous
+//!   frame form such a polyline (within [`POLYLINE_TOLERANCE`]), that is the body (a kinsynth
+//!   export carries its DH bodies this way); otherwise it is the straight segment between the
+//!   two origins ([`LinkGeometry::from_transform`]). Prismatic joints get the chain's slider
+//!   segment.
+//! - Radius: the caller's, else the largest radius of the `<collision>` cylinders, capsules and
+//!   spheres between base and tip, else [`DEFAULT_RADIUS`].
+//!
+//! Joint names are the URDF joint names, in the order of the actuation vector.
+
+use crate::error::{Error, Result};
+use crate::export::urdf::{isometry_of, z_to};
+use crate::kinematics::{Axis, Chain, Link, LinkGeometry, Range};
+use nalgebra::{IsometryMatrix3, Point3, Translation3, Vector3};
+use std::collections::HashMap;
+use std::f64::consts::PI;
+use std::path::Path;
+
+/// Capsule radius when neither the caller nor the URDF's collision geometry gives one (m).
+pub const DEFAULT_RADIUS: f64 = 0.05;
+/// Distance under which collision segment ends count as joined (m).
+pub const POLYLINE_TOLERANCE: f64 = 1e-9;
+
+/// A URDF robot as a chain.
+#[derive(Clone, Debug)]
+pub struct UrdfChain {
+    /// The chain, one link per moving joint (merged as the module documentation says).
+    pub chain: Chain,
+    /// URDF names of the moving joints, in actuation-vector order.
+    pub joint_names: Vec<String>,
+    /// The base frame used.
+    pub base: String,
+    /// The tip frame used.
+    pub tip: String,
+    /// The capsule radius used.
+    pub radius: f64,
+}
+
+fn urdf_err(element: impl Into<String>, reason: impl Into<String>) -> Error {
+    Error::Urdf {
+        element: element.into(),
+        reason: reason.into(),
+    }
+}
+
+fn describe(j: &urdf_rs::Joint) -> String {
+    format!(
+        "joint '{}' (parent '{}', child '{}')",
+        j.name, j.parent.link, j.child.link
+    )
+}
+
+/// Reads and parses a URDF file; errors name the file.
+pub fn read_urdf(path: &Path) -> Result<urdf_rs::Robot> {
+    let text = std::fs::read_to_string(path).map_err(|source| Error::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    urdf_rs::read_from_string(&text).map_err(|e| Error::Parse {
+        file: path.to_path_buf(),
+        message: format!("not a valid URDF: {e}"),
+    })
+}
+
+/// [`read_urdf`] then [`chain_from_urdf`]; every error names the file.
+pub fn load_chain(
+    path: &Path,
+    base: Option<&str>,
+    tip: Option<&str>,
+    radius: Option<f64>,
+    colliders_per_link: usize,
+) -> Result<UrdfChain> {
+    let robot = read_urdf(path)?;
+    chain_from_urdf(&robot, base, tip, radius, colliders_per_link).map_err(|e| e.in_file(path))
+}
+
+/// Segments of the `<collision>` cylinders and capsules of a link, in its frame.
+fn collision_segments(link: &urdf_rs::Link) -> Vec<[Point3<f64>; 2]> {
+    link.collision
+        .iter()
+        .filter_map(|c| match c.geometry {
+            urdf_rs::Geometry::Cylinder { length, .. }
+            | urdf_rs::Geometry::Capsule { length, .. } => {
+                let t = isometry_of(&c.origin);
+                let h = t.rotation * Vector3::new(0.0, 0.0, 0.5 * length);
+                let m = Point3::from(t.translation.vector);
+                Some([m - h, m + h])
+            }
+            _ => None,
+        })
+        .collect()
+}
+
+/// Largest radius of a link's collision cylinders, capsules and spheres.
+fn collision_radius(link: &urdf_rs::Link) -> Option<f64> {
+    link.collision
+        .iter()
+        .filter_map(|c| match c.geometry {
+            urdf_rs::Geometry::Cylinder { radius, .. }
+            | urdf_rs::Geometry::Capsule { radius, .. }
+            | urdf_rs::Geometry::Sphere { radius } => Some(radius),
+            _ => None,
+        })
+        .reduce(f64::max)
+}
+
+/// A polyline from `from` to `to` made of `segs` (each used once, either way round), by
+/// depth-first search; its ends are exactly `from` and `to`.
+fn find_polyline(
+    segs: &[[Point3<f64>; 2]],
+    from: Point3<f64>,
+    to: Point3<f64>,
+) -> Option<Vec<Point3<f64>>> {
+    fn walk(
+        segs: &[[Point3<f64>; 2]],
+        used: &mut [bool],
+        at: Point3<f64>,
+        to: Point3<f64>,
+        out: &mut Vec<Point3<f64>>,
+    ) -> bool {
+        if (at - to).norm() <= POLYLINE_TOLERANCE && out.len() > 1 {
+            return true;
+        }
+        for k in 0..segs.len() {
+            if used[k] {
+                continue;
+            }
+            for (a, b) in [(0, 1), (1, 0)] {
+                if (segs[k][a] - at).norm() <= POLYLINE_TOLERANCE {
+                    used[k] = true;
+                    out.push(segs[k][b]);
+                    if walk(segs, used, segs[k][b], to, out) {
+                        return true;
+                    }
+                    out.pop();
+                    used[k] = false;
+                }
+            }
+        }
+        false
+    }
+    if segs.len() > 64 {
+        return None;
+    }
+    let mut used = vec![false; segs.len()];
+    let mut out = vec![from];
+    if walk(segs, &mut used, from, to, &mut out) {
+        out[0] = from;
+        let last = out.len() - 1;
+        out[last] = to;
+        Some(out)
+    } else {
+        None
+    }
+}
+
+/// The body from the previous frame's origin to `transform`'s origin: a polyline of the
+/// collision segments of `group` (links with their poses in the previous frame), if they form
+/// one, else the straight segment.
+fn link_geometry(
+    transform: IsometryMatrix3<f64>,
+    group: &[(&urdf_rs::Link, IsometryMatrix3<f64>)],
+) -> LinkGeometry {
+    let straight = LinkGeometry::from_transform(transform);
+    let end = Point3::from(transform.translation.vector);
+    if end.coords.norm() == 0.0 {
+        return straight;
+    }
+    let segs: Vec<[Point3<f64>; 2]> = group
+        .iter()
+        .flat_map(|(l, pose)| {
+            collision_segments(l)
+                .into_iter()
+                .map(move |[a, b]| [pose * a, pose * b])
+        })
+        .collect();
+    match find_polyline(&segs, Point3::origin(), end) {
+        Some(body) => LinkGeometry { transform, body },
+        None => straight,
+    }
+}
+
+fn is_identity(t: &IsometryMatrix3<f64>) -> bool {
+    t.translation.vector == Vector3::zeros() && t.rotation == nalgebra::Rotation3::identity()
+}
+
+/// The chain axis of a URDF joint axis: `(axis, None)` for +x, +y, +z, else `Rz`/`Tz` with the
+/// rotation that turns local z onto it.
+fn chain_axis(
+    j: &urdf_rs::Joint,
+    rotation: bool,
+) -> Result<(Axis, Option<nalgebra::Rotation3<f64>>)> {
+    let v = Vector3::from(j.axis.xyz.0);
+    let n = v.norm();
+    if !(n.is_finite() && n > 0.0) {
+        return Err(urdf_err(
+            describe(j),
+            format!("axis {:?} has no direction", j.axis.xyz.0),
+        ));
+    }
+    let d = v / n;
+    let unit = [Vector3::x(), Vector3::y(), Vector3::z()];
+    if let Some(k) = unit.iter().position(|u| *u == d) {
+        let axis = Axis::ALL[if rotation { k } else { k + 3 }];
+        return Ok((axis, None));
+    }
+    let axis = if rotation { Axis::Rz } else { Axis::Tz };
+    Ok((axis, Some(z_to(&d))))
+}
+
+fn joint_range(j: &urdf_rs::Joint) -> Result<Range> {
+    if j.joint_type == urdf_rs::JointType::Continuous {
+        return Ok(Range::new(-PI, PI));
+    }
+    let (lo, hi) = (j.limit.lower, j.limit.upper);
+    if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+        return Err(urdf_err(
+            describe(j),
+            format!(
+                "<limit lower=\"{lo}\" upper=\"{hi}\">: a {} joint needs finite limits with lower < upper",
+                if j.joint_type == urdf_rs::JointType::Revolute { "revolute" } else { "prismatic" }
+            ),
+        ));
+    }
+    Ok(Range::new(lo, hi))
+}
+
+/// The chain of a URDF robot from `base` (default: the root link) to `tip` (default: the leaf
+/// below the base), with capsule `radius` (default: the URDF's collision radius, else
+/// [`DEFAULT_RADIUS`]) and `colliders_per_link` point colliders per link. See the module
+/// documentation for the mapping; errors name the joint or link and what is wrong.
+pub fn chain_from_urdf(
+    robot: &urdf_rs::Robot,
+    base: Option<&str>,
+    tip: Option<&str>,
+    radius: Option<f64>,
+    colliders_per_link: usize,
+) -> Result<UrdfChain> {
+    let links: HashMap<&str, &urdf_rs::Link> =
+        robot.links.iter().map(|l| (l.name.as_str(), l)).collect();
+    let mut parent_joint: HashMap<&str, &urdf_rs::Joint> = HashMap::new();
+    let mut child_joints: HashMap<&str, Vec<&urdf_rs::Joint>> = HashMap::new();
+    for j in &robot.joints {
+        for (role, l) in [("parent", &j.parent.link), ("child", &j.child.link)] {
+            if !links.contains_key(l.as_str()) {
+                return Err(urdf_err(
+                    describe(j),
+                    format!("its {role} link '{l}' is not defined"),
+                ));
+            }
+        }
+        if let Some(other) = parent_joint.insert(&j.child.link, j) {
+            return Err(urdf_err(
+                format!("link '{}'", j.child.link),
+                format!(
+                    "not a tree: it is the child of two joints, '{}' and '{}'",
+                    other.name, j.name
+                ),
+            ));
+        }
+        child_joints.entry(&j.parent.link).or_default().push(j);
+    }
+    let base = match base {
+        Some(b) => {
+            if !links.contains_key(b) {
+                return Err(urdf_err(
+                    format!("base frame '{b}'"),
+                    "no link of that name",
+                ));
+            }
+            b.to_string()
+        }
+        None => {
+            let roots: Vec<&str> = robot
+                .links
+                .iter()
+                .map(|l| l.name.as_str())
+                .filter(|l| !parent_joint.contains_key(l))
+                .collect();
+            match roots.as_slice() {
+                [r] => r.to_string(),
+                [] => {
+                    return Err(urdf_err(
+                        format!("robot '{}'", robot.name),
+                        "not a tree: no root link (every link is some joint's child)",
+                    ))
+                }
+                _ => {
+                    return Err(urdf_err(
+                        format!("robot '{}'", robot.name),
+                        format!(
+                            "not a tree: several root links ({}); pick one with --base-frame",
+                            roots.join(", ")
+                        ),
+                    ))
+                }
+            }
+        }
+    };
+    // Joints from the base down to the tip.
+    let (path, tip) = match tip {
+        Some(t) => {
+            if !links.contains_key(t) {
+                return Err(urdf_err(format!("tip frame '{t}'"), "no link of that name"));
+            }
+            let mut path = Vec::new();
+            let mut at = t;
+            while at != base {
+                let Some(j) = parent_joint.get(at) else {
+                    return Err(urdf_err(
+                        format!("tip frame '{t}'"),
+                        format!("not below the base frame '{base}'"),
+                    ));
+                };
+                if path.len() > robot.joints.len() {
+                    return Err(urdf_err(describe(j), "not a tree: the joints form a cycle"));
+                }
+                path.push(*j);
+                at = &j.parent.link;
+            }
+            path.reverse();
+            (path, t.to_string())
+        }
+        None => {
+            let mut path = Vec::new();
+            let mut at = base.as_str();
+            loop {
+                match child_joints.get(at).map(Vec::as_slice).unwrap_or(&[]) {
+                    [] => break,
+                    [j] => {
+                        if path.len() > robot.joints.len() {
+                            return Err(urdf_err(
+                                describe(j),
+                                "not a tree: the joints form a cycle",
+                            ));
+                        }
+                        path.push(*j);
+                        at = &j.child.link;
+                    }
+                    many => {
+                        let names: Vec<&str> = many.iter().map(|j| j.name.as_str()).collect();
+                        return Err(urdf_err(
+                            format!("link '{at}'"),
+                            format!(
+                                "branch between base '{base}' and tip: child joints {}; pick a tip with --tip-frame",
+                                names.join(", ")
+                            ),
+                        ));
+                    }
+                }
+            }
+            (path, at.to_string())
+        }
+    };
+    for j in &path {
+        use urdf_rs::JointType as T;
+        let kind = match j.joint_type {
+            T::Revolute | T::Continuous | T::Prismatic | T::Fixed => None,
+            T::Floating => Some("floating"),
+            T::Planar => Some("planar"),
+            T::Spherical => Some("spherical"),
+        };
+        if let Some(kind) = kind {
+            return Err(urdf_err(
+                describe(j),
+                format!("unsupported joint type '{kind}' (supported: revolute, continuous, prismatic, fixed)"),
+            ));
+        }
+        if j.mimic.is_some() && j.joint_type != T::Fixed {
+            return Err(urdf_err(describe(j), "mimic joints are not supported"));
+        }
+    }
+    // The base frame's pose in the root.
+    let mut base_pose = IsometryMatrix3::identity();
+    {
+        let mut at = base.as_str();
+        let mut up = Vec::new();
+        while let Some(j) = parent_joint.get(at) {
+            if up.len() > robot.joints.len() {
+                return Err(urdf_err(describe(j), "not a tree: the joints form a cycle"));
+            }
+            up.push(isometry_of(&j.origin));
+            at = &j.parent.link;
+        }
+        for t in up.iter().rev() {
+            base_pose *= t;
+        }
+    }
+    let radius = match radius {
+        Some(r) => {
+            if !(r.is_finite() && r >= 0.0) {
+                return Err(Error::invalid(
+                    "radius",
+                    r,
+                    "must be finite and not negative",
+                ));
+            }
+            r
+        }
+        None => std::iter::once(base.as_str())
+            .chain(path.iter().map(|j| j.child.link.as_str()))
+            .filter_map(|l| collision_radius(links[l]))
+            .reduce(f64::max)
+            .unwrap_or(DEFAULT_RADIUS),
+    };
+
+    // Links rigidly attached to the current chain frame, with their poses in it.
+    let mut group: Vec<(&urdf_rs::Link, IsometryMatrix3<f64>)> =
+        vec![(links[base.as_str()], IsometryMatrix3::identity())];
+    // Pose of the current URDF link in the current chain frame.
+    let mut pending = IsometryMatrix3::identity();
+    let mut chain_links: Vec<Link> = Vec::new();
+    let mut names = Vec::new();
+    // The link being built: can it take more axes (identity origin, coordinate axes)?
+    let mut open: Option<(Link, Axis, bool)> = None;
+    let mut started = false;
+    for j in &path {
+        let origin = isometry_of(&j.origin);
+        let child = links[j.child.link.as_str()];
+        if j.joint_type == urdf_rs::JointType::Fixed {
+            if !started && child.collision.is_empty() {
+                // Leading fixed joint to a link without geometry: part of the base pose.
+                base_pose *= origin;
+                let inv = origin.inverse();
+                for (_, pose) in &mut group {
+                    *pose = inv * *pose;
+                }
+                group.push((child, IsometryMatrix3::identity()));
+                continue;
+            }
+            started = true;
+            pending *= origin;
+            group.push((child, pending));
+            continue;
+        }
+        started = true;
+        let rotation = j.joint_type != urdf_rs::JointType::Prismatic;
+        let (axis, align) = chain_axis(j, rotation)?;
+        let range = joint_range(j)?;
+        let full = pending * origin;
+        if let Some((link, last, true)) = &mut open {
+            if align.is_none() && is_identity(&full) && axis > *last {
+                link.ranges[axis.index()] = range;
+                *last = axis;
+                names.push(j.name.clone());
+                group = vec![(child, IsometryMatrix3::identity())];
+                continue;
+            }
+        }
+        if let Some((link, _, _)) = open.take() {
+            chain_links.push(link);
+        }
+        let align_iso = align.map_or_else(IsometryMatrix3::identity, |r| {
+            IsometryMatrix3::from_parts(Translation3::identity(), r)
+        });
+        let transform = full * align_iso;
+        let mut ranges = [Range::ZERO; 6];
+        ranges[axis.index()] = range;
+        open = Some((
+            Link {
+                geometry: link_geometry(transform, &group),
+                ranges,
+            },
+            axis,
+            align.is_none(),
+        ));
+        names.push(j.name.clone());
+        pending = align_iso.inverse();
+        group = vec![(child, pending)];
+    }
+    let Some((link, _, _)) = open else {
+        return Err(urdf_err(
+            format!("chain '{base}' → '{tip}'"),
+            "no moving joint (revolute, continuous or prismatic) between base and tip",
+        ));
+    };
+    chain_links.push(link);
+    if !is_identity(&pending) {
+        chain_links.push(Link {
+            geometry: link_geometry(pending, &group),
+            ranges: [Range::ZERO; 6],
+        });
+    }
+    Ok(UrdfChain {
+        chain: Chain::new(base_pose, &chain_links, radius, colliders_per_link),
+        joint_names: names,
+        base,
+        tip,
+        radius,
+    })
+}
+
+/// Replaces the joint names of every path in `report` with `names` (the URDF joint names of an
+/// imported chain, in actuation-vector order), so the paths replay on that URDF.
+pub fn rename_joints(report: &mut crate::planning::ReachReport, names: &[String]) {
+    for t in &mut report.targets {
+        if let Some(p) = &mut t.path {
+            p.joint_names = names.to_vec();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn polyline_search_backtracks_and_orients_segments() {
+        let p = |x, y| Point3::new(x, y, 0.0);
+        let segs = [
+            [p(-1.0, 0.0), p(0.0, 0.0)], // a dead end at the start
+            [p(1.0, 1.0), p(1.0, 0.0)],  // reversed
+            [p(0.0, 0.0), p(1.0, 0.0)],
+        ];
+        let poly = find_polyline(&segs, p(0.0, 0.0), p(1.0, 1.0)).unwrap();
+        assert_eq!(poly, vec![p(0.0, 0.0), p(1.0, 0.0), p(1.0, 1.0)]);
+        assert!(find_polyline(&segs, p(0.0, 0.0), p(2.0, 0.0)).is_none());
+    }
+}
