@@ -6,6 +6,16 @@ use kinsynth::Scenario;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+/// `println!` that ends the process quietly when stdout is closed (e.g. piped into `head`).
+macro_rules! say {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        if writeln!(std::io::stdout(), $($t)*).is_err() {
+            std::process::exit(0);
+        }
+    }};
+}
+
 /// Task-based kinematic design of serial manipulators in cluttered environments.
 #[derive(Parser)]
 #[command(name = "kinsynth", version, about, long_about = None)]
@@ -194,7 +204,7 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
         } => {
             let spec = preset::generate(p, seed);
             kinsynth::io::write_atomic(&output, preset::to_toml(p, &spec).as_bytes())?;
-            println!(
+            say!(
                 "wrote {} ({}, seed {seed}: {} obstacles, {} tasks)",
                 output.display(),
                 p.name(),
@@ -206,19 +216,19 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
             let s = Scenario::load(&file)?;
             let largest = s.space.largest();
             let chain = largest.chain();
-            println!("{}: ok", file.display());
-            println!("  name            {}", s.name);
-            println!(
+            say!("{}: ok", file.display());
+            say!("  name            {}", s.name);
+            say!(
                 "  links           {} (largest design: {} joints, reach {:.3} m)",
                 largest.links.len(),
                 chain.dof(),
                 largest.total_length()
             );
-            println!("  free variables  {}", s.space.dim());
-            println!("  obstacles       {}", s.workspace.obstacles.len());
-            println!("  tasks           {}", s.workspace.tasks.len());
-            println!("  clearance       {} m", s.workspace.clearance);
-            println!(
+            say!("  free variables  {}", s.space.dim());
+            say!("  obstacles       {}", s.workspace.obstacles.len());
+            say!("  tasks           {}", s.workspace.tasks.len());
+            say!("  clearance       {} m", s.workspace.clearance);
+            say!(
                 "  planner         {} checker, l_max {:.4}, {} iterations",
                 s.planner.checker.name(),
                 s.planner.l_max,
@@ -317,7 +327,7 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
             let runner = Runner::new(&s, &scenario_path, planner.clone(), options.clone(), &out);
             let mut observer = progress::Bar::new(&options, quiet);
             let summary = runner.run(checkpoint, &stop, &mut observer)?;
-            println!(
+            say!(
                 "{}: {} + {} (L_max {:.4}), seed {}: R = {:.3}, cost {:.4}, {} links and {} joints kept, total length {:.3} m; {} evaluations in {:.1} s ({})",
                 out.display(),
                 summary.optimizer,
@@ -352,7 +362,7 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
             let records = run_experiment(p, runs, time_limit, seed, &out, &mut |line| {
                 eprintln!("{line}")
             })?;
-            println!(
+            say!(
                 "{} runs of {} s written to {}",
                 records.len(),
                 time_limit,
@@ -365,7 +375,7 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
                 let med = |f: fn(&kinsynth::optimize::RunSummary) -> f64| {
                     median(mine.iter().map(|r| f(&r.summary)).collect()).unwrap_or(f64::NAN)
                 };
-                println!(
+                say!(
                     "  {:<32} R = 1 in {reached}/{} runs, median time to R = 1: {}; median final R {:.2}, links {:.1}, joints {:.1}",
                     m.label,
                     mine.len(),
@@ -427,7 +437,7 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
             if let Some(names) = &urdf_names {
                 kinsynth::import::urdf::rename_joints(&mut report, names);
             }
-            println!(
+            say!(
                 "R = {:.3} ({} of {} tasks) with {} at L_max {:.4}, seed {seed}: {} iterations, {} nodes, {} edge checks, {:.1} ms",
                 report.reachability,
                 report.reached(),
@@ -440,10 +450,10 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
                 elapsed.as_secs_f64() * 1e3
             );
             if let Some(why) = &report.home_blocked {
-                println!("  {why}");
+                say!("  {why}");
             }
             for t in &report.targets {
-                println!(
+                say!(
                     "  task {:>3} {:<11} error {:.4} m  path {}",
                     t.index,
                     if t.reached { "reached" } else { "not reached" },
@@ -458,7 +468,7 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
             }
             if let Some(dir) = &urdf.trajectories {
                 let files = kinsynth::export::trajectory::write_trajectories(&report, dir)?;
-                println!(
+                say!(
                     "wrote {} trajectory files to {}",
                     files.len(),
                     dir.display()
@@ -468,7 +478,7 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
         Command::Urdf { design, output } => {
             let d = kinsynth::Design::load(&design)?;
             kinsynth::export::write_urdf(&d, &output)?;
-            println!(
+            say!(
                 "wrote {} ({} links, {} joints)",
                 output.display(),
                 d.links.len(),
@@ -492,16 +502,22 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
             } else {
                 lmax
             };
-            println!(
+            say!(
                 "{}: largest design, {} edges per L_max, oracle {} sub-steps, body model {}",
                 file.display(),
                 count,
                 substeps,
                 s.planner.body.name()
             );
-            println!(
+            say!(
                 "{:>8} {:>10} {:>8} {:>12} {:>14} {:>9} {:>8}",
-                "L_max", "checker", "blocked", "false-free", "false-blocked", "µs/edge", "FK/edge"
+                "L_max",
+                "checker",
+                "blocked",
+                "false-free",
+                "false-blocked",
+                "µs/edge",
+                "FK/edge"
             );
             for l in lmax {
                 let edges = oracle::sample_edges(&scene, &chain, l, s.planner.lambda, count, seed);
@@ -512,7 +528,7 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
                 for kind in CheckerKind::ALL {
                     let checker = make_checker(kind, scene.clone(), s.planner.body);
                     let r = oracle::agreement(checker.as_ref(), &chain, &edges, &verdicts);
-                    println!(
+                    say!(
                         "{:>8.4} {:>10} {:>8} {:>5} ({:>4.1}%) {:>6} ({:>4.1}%) {:>9.2} {:>8.1}",
                         l,
                         r.checker,
