@@ -107,6 +107,23 @@ fn check_param(p: &ParamSpec, field: &str) -> Result<()> {
     }
 }
 
+/// The template value of a parameter: a fixed value as given; for a free one, a new design
+/// variable (appended to `vars`) and its midpoint as a placeholder.
+fn resolve(p: ParamSpec, link: usize, param: Param, vars: &mut Vec<Variable>) -> f64 {
+    match p {
+        ParamSpec::Fixed(v) => v,
+        ParamSpec::Free(lower, upper) => {
+            vars.push(Variable {
+                link,
+                param,
+                lower,
+                upper,
+            });
+            0.5 * (lower + upper)
+        }
+    }
+}
+
 fn fmt3(v: [f64; 3]) -> String {
     format!("[{}, {}, {}]", v[0], v[1], v[2])
 }
@@ -281,18 +298,7 @@ impl Scenario {
             let mut values = [0.0; 4];
             for ((param, (p, field)), value) in params.into_iter().zip(&specs).zip(&mut values) {
                 check_param(p, field)?;
-                *value = match *p {
-                    ParamSpec::Fixed(v) => v,
-                    ParamSpec::Free(lo, hi) => {
-                        vars.push(Variable {
-                            link: i + 1,
-                            param,
-                            lower: lo,
-                            upper: hi,
-                        });
-                        0.5 * (lo + hi)
-                    }
-                };
+                *value = resolve(*p, i + 1, param, &mut vars);
             }
             [link.theta, link.d, link.a, link.alpha] = values;
             let uniform_axes = r.uniform.axes.unwrap_or_default().entries();
@@ -313,18 +319,7 @@ impl Scenario {
                     (spec.min, Param::Min(axis), &mut range.min),
                     (spec.max, Param::Max(axis), &mut range.max),
                 ] {
-                    *slot = match p {
-                        ParamSpec::Fixed(v) => v,
-                        ParamSpec::Free(lo, hi) => {
-                            vars.push(Variable {
-                                link: i + 1,
-                                param,
-                                lower: lo,
-                                upper: hi,
-                            });
-                            0.5 * (lo + hi)
-                        }
-                    };
+                    *slot = resolve(p, i + 1, param, &mut vars);
                 }
                 if let (ParamSpec::Fixed(lo), ParamSpec::Fixed(hi)) = (spec.min, spec.max) {
                     check(
