@@ -70,9 +70,8 @@ fn a_sweep_through_a_small_ball_is_caught_by_all_but_discrete() {
 fn the_chord_misses_what_the_arc_hits() {
     // Segment checks the chord of each point's arc: a ball just outside the chords but inside
     // the swept arc is missed by `segment`, caught by `certified`, `ccd` and the oracle.
-    let r_arc = 1.0; // tip radius
-                     // The tip's chord from 0° to 90° passes at distance cos(45°) = 0.707 from the base; a ball
-                     // centred at 0.95 on the 45° ray with radius 0.1 touches the arc but not the chords.
+    // The tip's chord from 0° to 90° passes at distance cos(45°) = 0.707 from the base; a ball
+    // centred at 0.95 on the 45° ray with radius 0.1 touches the arc but not the chords.
     let c = Point3::new(0.95 * (PI / 4.0).cos(), 0.95 * (PI / 4.0).sin(), 0.0);
     let ball = Obstacle::sphere("ball", c, 0.1).unwrap();
     let s = scene(vec![ball], 0.0);
@@ -89,7 +88,6 @@ fn the_chord_misses_what_the_arc_hits() {
     );
     assert!(!verdict(CheckerKind::Certified, &mut scratch));
     assert!(!verdict(CheckerKind::Ccd, &mut scratch));
-    let _ = r_arc;
 }
 
 #[test]
