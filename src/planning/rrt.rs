@@ -263,8 +263,12 @@ impl<'a> Rrt<'a> {
     /// cap), until every task is reached. Each iteration either (with probability `goal_bias`)
     /// picks an unreached task, takes the node whose end effector is nearest to it, computes a
     /// goal configuration by damped-least-squares steps from there, and extends greedily toward
-    /// it (up to [`CONNECT_STEPS`] steps); or samples a configuration uniformly in the ranges
-    /// and extends the nearest node (actuation-space distance) one step toward it. Every new
+    /// it (up to [`CONNECT_STEPS`] steps). When that node was already tried for that task
+    /// (its IK goal and steps would only repeat), the IK instead starts from a configuration
+    /// sampled uniformly in the ranges, and the greedy extension starts from the node nearest
+    /// (actuation-space distance) to its solution: another arm posture for the same point. Or
+    /// the iteration samples a configuration uniformly in the ranges and extends the nearest
+    /// node (actuation-space distance) one step toward it. Every new
     /// node passes `node_free` and its edge `edge_free`. Deterministic for a given `rng` state.
     pub fn grow(&self, rng: &mut ChaCha8Rng, scratch: &mut Scratch) -> Growth {
         let chain = self.chain;
@@ -291,6 +295,7 @@ impl<'a> Rrt<'a> {
         let start = Instant::now();
         let mut iterations = 0;
         let mut unreached: Vec<usize> = Vec::with_capacity(self.tasks.len());
+        let mut tried: std::collections::HashSet<(u32, usize)> = std::collections::HashSet::new();
         while iterations < self.config.max_iterations && reached.iter().any(Option::is_none) {
             if let Some(limit) = self.config.time_limit {
                 if start.elapsed().as_secs_f64() > limit {
@@ -307,15 +312,32 @@ impl<'a> Rrt<'a> {
                 let j = unreached[rng.random_range(0..unreached.len())];
                 let target = self.tasks[j];
                 let mut node = tree.nearest_end_effector(&target);
+                // The same start toward the same task would repeat the same IK goal and the
+                // same steps: start the IK from a random configuration instead, and grow
+                // toward its solution from the node nearest to it in actuation space.
+                let restart = !tried.insert((node, j));
+                if restart {
+                    for (q, f) in work.q_new.iter_mut().zip(chain.free_axes()) {
+                        *q = rng.random_range(f.range.min..=f.range.max);
+                    }
+                }
+                let ik_start: &[f64] = if restart {
+                    &work.q_new
+                } else {
+                    tree.config(node)
+                };
                 dls(
                     chain,
-                    tree.config(node),
+                    ik_start,
                     &target,
                     self.config.ik_steps,
                     0.25 * self.config.goal_tolerance,
                     &mut work.ik,
                 );
                 work.q_goal.copy_from_slice(&work.ik.q);
+                if restart {
+                    node = tree.nearest_config(&work.q_goal);
+                }
                 let goal = std::mem::take(&mut work.q_goal);
                 for _ in 0..CONNECT_STEPS {
                     match self.extend(&mut tree, node, &goal, &mut work, scratch) {
