@@ -191,6 +191,36 @@ fn bundled_scenarios_give_replayable_paths() {
     }
 }
 
+/// The largest designs of paper-2d and paper-3d can reach all their tasks (the optimiser starts
+/// from there): the planner must find every one within the scenario's budget, for every seed.
+/// A planner that keeps retrying the same IK start for a task behind an obstacle fails this.
+#[test]
+fn the_largest_bundled_designs_reach_every_task_for_every_seed() {
+    for name in ["paper-2d.toml", "paper-3d.toml"] {
+        let s = Scenario::load(
+            &Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("examples/scenarios")
+                .join(name),
+        )
+        .unwrap();
+        let chain = s.space.largest().chain();
+        let scene = Arc::new(CollisionScene::new(&s.workspace));
+        let config = PlannerConfig {
+            checker: CheckerKind::Segment,
+            l_max: std::f64::consts::FRAC_PI_4,
+            ..s.planner.clone()
+        };
+        for seed in 0..10 {
+            let r = reachability(&chain, &scene, &s.workspace.tasks, &config, seed, 0);
+            assert_eq!(
+                r.reachability, 1.0,
+                "{name} seed {seed}: {} iterations",
+                r.iterations
+            );
+        }
+    }
+}
+
 fn reach_json(threads: &str, dir: &Path) -> String {
     let out = dir.join(format!("reach-{threads}.json"));
     let scenario = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scenarios/paper-2d.toml");
