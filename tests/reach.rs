@@ -168,15 +168,20 @@ fn a_colliding_home_pose_gives_zero_and_says_why() {
     assert!(why.contains("link 3") && why.contains("post"), "{why}");
 }
 
+/// A scenario from `examples/scenarios/`.
+fn bundled(name: &str) -> Scenario {
+    Scenario::load(
+        &Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("examples/scenarios")
+            .join(name),
+    )
+    .unwrap()
+}
+
 #[test]
 fn bundled_scenarios_give_replayable_paths() {
     for name in ["paper-3d.toml", "pipework.toml"] {
-        let s = Scenario::load(
-            &Path::new(env!("CARGO_MANIFEST_DIR"))
-                .join("examples/scenarios")
-                .join(name),
-        )
-        .unwrap();
+        let s = bundled(name);
         let design = s.space.largest();
         let scene = Arc::new(CollisionScene::new(&s.workspace));
         for checker in [CheckerKind::Segment, CheckerKind::Certified] {
@@ -197,12 +202,7 @@ fn bundled_scenarios_give_replayable_paths() {
 #[test]
 fn the_largest_bundled_designs_reach_every_task_for_every_seed() {
     for name in ["paper-2d.toml", "paper-3d.toml"] {
-        let s = Scenario::load(
-            &Path::new(env!("CARGO_MANIFEST_DIR"))
-                .join("examples/scenarios")
-                .join(name),
-        )
-        .unwrap();
+        let s = bundled(name);
         let chain = s.space.largest().chain();
         let scene = Arc::new(CollisionScene::new(&s.workspace));
         let config = PlannerConfig {
