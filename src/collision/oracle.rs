@@ -4,7 +4,7 @@
 use super::body::capsules_min_distance;
 use super::scene::CollisionScene;
 use crate::kinematics::{step_length, Chain};
-use rand::{RngExt, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 /// Default number of sub-steps of an oracle edge (the samples are `t = i/N`, `i = 0 … N`).
@@ -76,11 +76,9 @@ pub fn sample_edges(
     let mut fb = chain.frames();
     let mut out = Vec::with_capacity(count);
     let draw = |rng: &mut ChaCha8Rng| -> Vec<f64> {
-        chain
-            .free_axes()
-            .iter()
-            .map(|f| rng.random_range(f.range.min..=f.range.max))
-            .collect()
+        let mut q = vec![0.0; chain.dof()];
+        chain.sample_config(rng, &mut q);
+        q
     };
     let mut attempts = 0usize;
     while out.len() < count {

@@ -3,6 +3,7 @@
 use super::axis::{Axis, Range};
 use super::link::Link;
 use nalgebra::{IsometryMatrix3, Matrix3, Point3, Rotation3, Vector3};
+use rand::RngExt;
 
 /// An actuation axis that moves: a joint of the chain, with the link it belongs to.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -232,6 +233,14 @@ impl Chain {
     /// The free axes, in actuation-vector order.
     pub fn free_axes(&self) -> &[FreeAxis] {
         &self.free
+    }
+
+    /// Fills `q` (length [`Chain::dof`]) with a configuration drawn uniformly from the free
+    /// axes' ranges, one draw per axis in actuation-vector order.
+    pub fn sample_config(&self, rng: &mut impl RngExt, q: &mut [f64]) {
+        for (q, f) in q.iter_mut().zip(&self.free) {
+            *q = rng.random_range(f.range.min..=f.range.max);
+        }
     }
 
     /// Joint names of the free axes (`j{link}_{axis}`), in actuation-vector order.
@@ -521,6 +530,36 @@ mod tests {
         let p = f.end_effector();
         assert_relative_eq!(p.x, 1.0 + 0.5f64.cos(), epsilon = 1e-12);
         assert_relative_eq!(p.y, 0.5f64.sin(), epsilon = 1e-12);
+    }
+
+    #[test]
+    fn sampled_configurations_fill_each_axis_range() {
+        use rand::SeedableRng;
+        let links = [
+            Link::from_dh(&Dh::default(), ranges(&[(Axis::Rz, -1.0, 2.0)])),
+            Link::from_dh(&Dh::default(), ranges(&[(Axis::Tx, 0.5, 0.75)])),
+        ];
+        let chain = Chain::new(IsometryMatrix3::identity(), &links, 0.1, 3);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let mut q = [0.0; 2];
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for _ in 0..2000 {
+            chain.sample_config(&mut rng, &mut q);
+            for k in 0..2 {
+                lo[k] = lo[k].min(q[k]);
+                hi[k] = hi[k].max(q[k]);
+            }
+        }
+        // Inside each range, and spread over it (2,000 uniform draws leave gaps < 1 %).
+        for (k, (min, max)) in [(-1.0, 2.0), (0.5, 0.75)].into_iter().enumerate() {
+            assert!(
+                lo[k] >= min && hi[k] <= max,
+                "axis {k}: [{}, {}]",
+                lo[k],
+                hi[k]
+            );
+            assert!(lo[k] - min < 0.01 * (max - min) && max - hi[k] < 0.01 * (max - min));
+        }
     }
 
     #[test]

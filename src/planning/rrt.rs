@@ -8,6 +8,7 @@ use crate::kinematics::{Chain, Frames};
 use nalgebra::Point3;
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
+use std::collections::HashSet;
 use std::time::Instant;
 
 /// Greedy steps toward an inverse-kinematics goal in one goal-biased iteration.
@@ -263,13 +264,13 @@ impl<'a> Rrt<'a> {
     /// cap), until every task is reached. Each iteration either (with probability `goal_bias`)
     /// picks an unreached task, takes the node whose end effector is nearest to it, computes a
     /// goal configuration by damped-least-squares steps from there, and extends greedily toward
-    /// it (up to [`CONNECT_STEPS`] steps). When that node was already tried for that task
-    /// (its IK goal and steps would only repeat), the IK instead starts from a configuration
-    /// sampled uniformly in the ranges, and the greedy extension starts from the node nearest
-    /// (actuation-space distance) to its solution: another arm posture for the same point. Or
-    /// the iteration samples a configuration uniformly in the ranges and extends the nearest
-    /// node (actuation-space distance) one step toward it. Every new
-    /// node passes `node_free` and its edge `edge_free`. Deterministic for a given `rng` state.
+    /// it (up to [`CONNECT_STEPS`] steps); when that node was already tried for that task (its
+    /// IK goal and steps would only repeat), the IK starts instead from a configuration sampled
+    /// uniformly in the ranges and the extension from the node nearest (actuation-space
+    /// distance) to its solution: another arm posture for the same point. Otherwise the
+    /// iteration samples a configuration uniformly in the ranges and extends the nearest node
+    /// (actuation-space distance) one step toward it. Every new node passes `node_free` and its
+    /// edge `edge_free`. Deterministic for a given `rng` state.
     pub fn grow(&self, rng: &mut ChaCha8Rng, scratch: &mut Scratch) -> Growth {
         let chain = self.chain;
         let mut tree = Tree::new(chain);
@@ -295,7 +296,7 @@ impl<'a> Rrt<'a> {
         let start = Instant::now();
         let mut iterations = 0;
         let mut unreached: Vec<usize> = Vec::with_capacity(self.tasks.len());
-        let mut tried: std::collections::HashSet<(u32, usize)> = std::collections::HashSet::new();
+        let mut tried: HashSet<(u32, usize)> = HashSet::new();
         while iterations < self.config.max_iterations && reached.iter().any(Option::is_none) {
             if let Some(limit) = self.config.time_limit {
                 if start.elapsed().as_secs_f64() > limit {
@@ -316,12 +317,8 @@ impl<'a> Rrt<'a> {
                 // same steps: start the IK from a random configuration instead, and grow
                 // toward its solution from the node nearest to it in actuation space.
                 let restart = !tried.insert((node, j));
-                if restart {
-                    for (q, f) in work.q_new.iter_mut().zip(chain.free_axes()) {
-                        *q = rng.random_range(f.range.min..=f.range.max);
-                    }
-                }
                 let ik_start: &[f64] = if restart {
+                    chain.sample_config(rng, &mut work.q_new);
                     &work.q_new
                 } else {
                     tree.config(node)
@@ -352,9 +349,7 @@ impl<'a> Rrt<'a> {
                 }
                 work.q_goal = goal;
             } else {
-                for (q, f) in work.q_goal.iter_mut().zip(chain.free_axes()) {
-                    *q = rng.random_range(f.range.min..=f.range.max);
-                }
+                chain.sample_config(rng, &mut work.q_goal);
                 let near = tree.nearest_config(&work.q_goal);
                 let goal = std::mem::take(&mut work.q_goal);
                 if let Some(n) = self.extend(&mut tree, near, &goal, &mut work, scratch) {
