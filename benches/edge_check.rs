@@ -27,7 +27,15 @@ fn edges(c: &mut Criterion) {
             ("pi/4", std::f64::consts::FRAC_PI_4),
             ("pi/40", std::f64::consts::PI / 40.0),
         ] {
-            let edges = sample_edges(&scene, &chain, l_max, s.planner.lambda, 256, 7);
+            let edges = sample_edges(
+                &scene,
+                &chain,
+                &kinsynth::collision::RobotBody::of_chain(&chain),
+                l_max,
+                s.planner.lambda,
+                256,
+                7,
+            );
             let mut group = c.benchmark_group(format!("edge/{label}/{lname}"));
             for kind in CheckerKind::ALL {
                 let checker = make_checker(kind, scene.clone(), BodyModel::Capsules);

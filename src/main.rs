@@ -496,6 +496,8 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
             use std::f64::consts::PI;
             let s = Scenario::load(&file)?;
             let chain = s.space.largest().chain();
+            let body =
+                kinsynth::collision::RobotBody::new(&chain, Vec::new(), &s.planner.self_collision);
             let scene = std::sync::Arc::new(CollisionScene::new(&s.workspace));
             let lmax = if lmax.is_empty() {
                 vec![PI / 40.0, PI / 8.0, PI / 4.0]
@@ -503,11 +505,12 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
                 lmax
             };
             say!(
-                "{}: largest design, {} edges per L_max, oracle {} sub-steps, body model {}",
+                "{}: largest design, {} edges per L_max, oracle {} sub-steps, body model {}, {} self pairs",
                 file.display(),
                 count,
                 substeps,
-                s.planner.body.name()
+                s.planner.body.name(),
+                body.self_pairs().len()
             );
             say!(
                 "{:>8} {:>10} {:>8} {:>12} {:>14} {:>9} {:>8}",
@@ -520,14 +523,15 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
                 "FK/edge"
             );
             for l in lmax {
-                let edges = oracle::sample_edges(&scene, &chain, l, s.planner.lambda, count, seed);
+                let edges =
+                    oracle::sample_edges(&scene, &chain, &body, l, s.planner.lambda, count, seed);
                 let verdicts: Vec<_> = edges
                     .iter()
-                    .map(|(a, b)| oracle::judge_edge(&scene, &chain, a, b, substeps))
+                    .map(|(a, b)| oracle::judge_edge(&scene, &chain, &body, a, b, substeps))
                     .collect();
                 for kind in CheckerKind::ALL {
                     let checker = make_checker(kind, scene.clone(), s.planner.body);
-                    let r = oracle::agreement(checker.as_ref(), &chain, &edges, &verdicts);
+                    let r = oracle::agreement(checker.as_ref(), &chain, &body, &edges, &verdicts);
                     say!(
                         "{:>8.4} {:>10} {:>8} {:>5} ({:>4.1}%) {:>6} ({:>4.1}%) {:>9.2} {:>8.1}",
                         l,

@@ -49,7 +49,17 @@ fn a_sweep_through_a_small_ball_is_caught_by_all_but_discrete() {
     let s = scene(vec![ball], 0.0);
     let chain = sweeping_arm().chain();
     let (from, to) = (vec![0.0], vec![FRAC_PI_2]);
-    assert!(!judge_edge(&s, &chain, &from, &to, ORACLE_SUBSTEPS).free);
+    assert!(
+        !judge_edge(
+            &s,
+            &chain,
+            &kinsynth::collision::RobotBody::of_chain(&chain),
+            &from,
+            &to,
+            ORACLE_SUBSTEPS
+        )
+        .free
+    );
     let mut scratch = Scratch::new(&chain);
     for kind in CheckerKind::ALL {
         let c = make_checker(kind, s.clone(), BodyModel::Capsules);
@@ -77,7 +87,17 @@ fn the_chord_misses_what_the_arc_hits() {
     let s = scene(vec![ball], 0.0);
     let chain = sweeping_arm().chain();
     let (from, to) = (vec![0.0], vec![FRAC_PI_2]);
-    assert!(!judge_edge(&s, &chain, &from, &to, ORACLE_SUBSTEPS).free);
+    assert!(
+        !judge_edge(
+            &s,
+            &chain,
+            &kinsynth::collision::RobotBody::of_chain(&chain),
+            &from,
+            &to,
+            ORACLE_SUBSTEPS
+        )
+        .free
+    );
     let mut scratch = Scratch::new(&chain);
     let verdict = |kind: CheckerKind, scratch: &mut Scratch| {
         make_checker(kind, s.clone(), BodyModel::Capsules).edge_free(&chain, &from, &to, scratch)
@@ -119,8 +139,23 @@ fn check_certified_against_oracle(s: &Scenario, count: usize, seed: u64) {
     let mut blocked = 0;
     let mut proven_free = 0;
     for l_max in [PI / 8.0, PI / 4.0] {
-        for (a, b) in sample_edges(&scene, &chain, l_max, s.planner.lambda, count / 2, seed) {
-            let oracle = judge_edge(&scene, &chain, &a, &b, ORACLE_SUBSTEPS);
+        for (a, b) in sample_edges(
+            &scene,
+            &chain,
+            &kinsynth::collision::RobotBody::of_chain(&chain),
+            l_max,
+            s.planner.lambda,
+            count / 2,
+            seed,
+        ) {
+            let oracle = judge_edge(
+                &scene,
+                &chain,
+                &kinsynth::collision::RobotBody::of_chain(&chain),
+                &a,
+                &b,
+                ORACLE_SUBSTEPS,
+            );
             let free = certified.edge_free(&chain, &a, &b, &mut scratch);
             assert!(
                 !free || oracle.free,
@@ -151,7 +186,15 @@ fn sampled_edges_respect_the_step_bound() {
     let chain = s.space.largest().chain();
     let scene = CollisionScene::new(&s.workspace);
     let (mut fa, mut fb) = (chain.frames(), chain.frames());
-    for (a, b) in sample_edges(&scene, &chain, PI / 4.0, 0.1, 50, 3) {
+    for (a, b) in sample_edges(
+        &scene,
+        &chain,
+        &kinsynth::collision::RobotBody::of_chain(&chain),
+        PI / 4.0,
+        0.1,
+        50,
+        3,
+    ) {
         assert!(chain.within_ranges(&a) && chain.within_ranges(&b));
         chain.fk(&a, &mut fa);
         chain.fk(&b, &mut fb);

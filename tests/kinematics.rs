@@ -124,7 +124,8 @@ fn prismatic_chain_matches_hand_computation() {
     );
     let mut f = c.frames();
     c.fk(&[FRAC_PI_2, 0.4, 0.25], &mut f);
-    // Link 1: body (0,0,0)→(0,0,0.2), slider (0,0,0.2)→(0,0,0.6); link 2: body, slider.
+    // Link 1: body (0,0,0)→(0,0,0.2), rod (0,0,−0.4)→(0,0,0.6) (the 1 m stroke, ending at F_1);
+    // link 2: body, rod of the 0.5 m stroke ending at F_2.
     assert_eq!(c.segment_count(), 4);
     assert_relative_eq!(
         f.segments[1][1],
@@ -132,8 +133,18 @@ fn prismatic_chain_matches_hand_computation() {
         epsilon = 1e-12
     );
     assert_relative_eq!(
+        f.segments[1][0],
+        Point3::new(0.0, 0.0, -0.4),
+        epsilon = 1e-12
+    );
+    assert_relative_eq!(
         f.segments[3][0],
-        Point3::new(0.0, 0.3, 0.6),
+        Point3::new(0.0, 0.05, 0.6),
+        epsilon = 1e-12
+    );
+    assert_relative_eq!(
+        f.segments[3][1],
+        Point3::new(0.0, 0.55, 0.6),
         epsilon = 1e-12
     );
     assert_relative_eq!(f.joints[1], Point3::new(0.0, 0.3, 0.6), epsilon = 1e-12);

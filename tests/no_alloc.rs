@@ -60,7 +60,15 @@ fn edge_checks_do_not_allocate_once_warm() {
     let s = Scenario::from_spec(&generate(Preset::Paper3d, 2)).unwrap();
     let chain = s.space.largest().chain();
     let scene = Arc::new(CollisionScene::new(&s.workspace));
-    let edges = sample_edges(&scene, &chain, std::f64::consts::FRAC_PI_4, 0.1, 200, 1);
+    let edges = sample_edges(
+        &scene,
+        &chain,
+        &kinsynth::collision::RobotBody::of_chain(&chain),
+        std::f64::consts::FRAC_PI_4,
+        0.1,
+        200,
+        1,
+    );
     for kind in [
         CheckerKind::Discrete,
         CheckerKind::Segment,

@@ -137,13 +137,21 @@ fn an_obstacle_forces_a_detour_that_certified_finds_and_the_oracle_confirms() {
     let chain = design.chain();
     let path = &report.targets[0].path.as_ref().unwrap().points;
     for w in path.windows(2) {
-        let v = judge_edge(&scene, &chain, &w[0], &w[1], ORACLE_SUBSTEPS);
+        let v = judge_edge(
+            &scene,
+            &chain,
+            &kinsynth::collision::RobotBody::of_chain(&chain),
+            &w[0],
+            &w[1],
+            ORACLE_SUBSTEPS,
+        );
         assert!(v.free, "path edge collides at t = {:?}", v.first_hit);
     }
     // The straight motion from home to the final configuration would cross the wall.
     let direct = judge_edge(
         &scene,
         &chain,
+        &kinsynth::collision::RobotBody::of_chain(&chain),
         &path[0],
         path.last().unwrap(),
         ORACLE_SUBSTEPS,

@@ -8,6 +8,6 @@ pub mod edge;
 pub mod oracle;
 pub mod scene;
 
-pub use body::BodyModel;
+pub use body::{BodyModel, RobotBody, SelfCollisionConfig};
 pub use edge::{make_checker, CheckerKind, EdgeChecker, EdgeStats, Scratch};
 pub use scene::CollisionScene;

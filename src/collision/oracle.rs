@@ -1,7 +1,8 @@
-//! The ground truth for edges: dense sampling of the motion with the exact capsule distance at
-//! every sample. For tests and reports only; the planner never uses it.
+//! The ground truth for edges: dense sampling of the motion with the exact distances of every
+//! robot body to every obstacle and of every checked self pair at every sample. For tests and
+//! reports only; the planner never uses it.
 
-use super::body::capsules_min_distance;
+use super::body::{Placed, RobotBody};
 use super::scene::CollisionScene;
 use crate::kinematics::{step_length, Chain};
 use rand::SeedableRng;
@@ -13,41 +14,46 @@ pub const ORACLE_SUBSTEPS: usize = 2000;
 /// What the oracle found along an edge.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct OracleVerdict {
-    /// True when every sample keeps every capsule farther than the clearance.
+    /// True when every sample keeps every body farther than the clearance from every obstacle
+    /// and every checked self pair apart.
     pub free: bool,
-    /// Smallest capsule–obstacle distance over the samples.
+    /// Smallest body–obstacle distance over the samples.
     pub min_distance: f64,
+    /// Smallest distance over the checked self pairs and the samples (`+∞` without pairs).
+    pub min_self_distance: f64,
     /// Parameter `t` of the first colliding sample, if any.
     pub first_hit: Option<f64>,
 }
 
-/// Judges an edge by sampling it `substeps + 1` times with the exact capsule distances. It
-/// stops at the first colliding sample.
+/// Judges an edge by sampling it `substeps + 1` times with the exact distances of `body` (the
+/// robot body of `chain`). It stops at the first colliding sample.
 pub fn judge_edge(
     scene: &CollisionScene,
     chain: &Chain,
+    body: &RobotBody,
     from: &[f64],
     to: &[f64],
     substeps: usize,
 ) -> OracleVerdict {
     let mut frames = chain.frames();
+    let mut placed = Placed::default();
     let mut q = vec![0.0; from.len()];
     let mut min_distance = f64::INFINITY;
-    let r = chain.radius();
+    let mut min_self_distance = f64::INFINITY;
     for i in 0..=substeps {
-        let t = i as f64 / substeps as f64;
+        let t = i as f64 / substeps.max(1) as f64;
         for ((qi, a), b) in q.iter_mut().zip(from).zip(to) {
             *qi = a + t * (b - a);
         }
         chain.fk(&q, &mut frames);
-        // Exact below the running minimum (culled above it), so `min_distance` is exact.
-        for s in &frames.segments {
-            min_distance = min_distance.min(scene.min_distance(&s[0], &s[1], r, min_distance));
-        }
-        if min_distance <= scene.clearance() {
+        body.place(chain, &frames, &mut placed);
+        min_distance = min_distance.min(body.min_obstacle_distance(scene, &frames, &placed));
+        min_self_distance = min_self_distance.min(body.min_self_distance(&frames, &placed));
+        if min_distance <= scene.clearance() || min_self_distance <= 0.0 {
             return OracleVerdict {
                 free: false,
                 min_distance,
+                min_self_distance,
                 first_hit: Some(t),
             };
         }
@@ -55,17 +61,20 @@ pub fn judge_edge(
     OracleVerdict {
         free: true,
         min_distance,
+        min_self_distance,
         first_hit: None,
     }
 }
 
 /// Random edges like the planner's: a start configuration drawn uniformly in the ranges whose
-/// body is clear (capsules, by exact distance), steered toward another uniform sample and cut
+/// body is clear (every body and self pair, by exact distance), steered toward another uniform sample and cut
 /// back (by bisection on the step parameter) until the step metric of paper Eq. 10,
-/// `‖f(b) − f(a)‖ + λ‖b − a‖`, is at most `l_max`. Deterministic for a seed.
+/// `‖f(b) − f(a)‖ + λ‖b − a‖`, is at most `l_max`. Deterministic for a seed. Fewer than `count`
+/// edges come back when collision-free starts are too rare to find.
 pub fn sample_edges(
     scene: &CollisionScene,
     chain: &Chain,
+    body: &RobotBody,
     l_max: f64,
     lambda: f64,
     count: usize,
@@ -74,6 +83,7 @@ pub fn sample_edges(
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut fa = chain.frames();
     let mut fb = chain.frames();
+    let mut placed = Placed::default();
     let mut out = Vec::with_capacity(count);
     let draw = |rng: &mut ChaCha8Rng| -> Vec<f64> {
         let mut q = vec![0.0; chain.dof()];
@@ -83,13 +93,15 @@ pub fn sample_edges(
     let mut attempts = 0usize;
     while out.len() < count {
         attempts += 1;
-        assert!(
-            attempts < 1000 * count + 10_000,
-            "no collision-free start configurations in this scene"
-        );
+        if attempts > 1000 * count + 10_000 {
+            break; // hardly any collision-free start: return what was found
+        }
         let a = draw(&mut rng);
         chain.fk(&a, &mut fa);
-        if capsules_min_distance(scene, chain, &fa) <= scene.clearance() {
+        body.place(chain, &fa, &mut placed);
+        if body.min_obstacle_distance(scene, &fa, &placed) <= scene.clearance()
+            || body.min_self_distance(&fa, &placed) <= 0.0
+        {
             continue;
         }
         let target = draw(&mut rng);
@@ -165,10 +177,11 @@ impl Agreement {
 pub fn agreement(
     checker: &dyn super::EdgeChecker,
     chain: &Chain,
+    body: &RobotBody,
     edges: &[(Vec<f64>, Vec<f64>)],
     verdicts: &[OracleVerdict],
 ) -> Agreement {
-    let mut scratch = super::Scratch::new(chain);
+    let mut scratch = super::Scratch::with_body(chain, std::sync::Arc::new(body.clone()));
     let mut false_free = 0;
     let mut false_blocked = 0;
     let start = std::time::Instant::now();

@@ -139,6 +139,19 @@ impl CollisionScene {
         }
     }
 
+    /// Distance between a parry `shape` at world pose `pose` and obstacle `k` (0 when they
+    /// touch or overlap).
+    #[inline]
+    pub fn shape_distance(
+        &self,
+        k: usize,
+        pose: &Pose,
+        shape: &dyn parry3d_f64::shape::Shape,
+    ) -> f64 {
+        let o = &self.obstacles[k];
+        query::distance(pose, shape, o.pose(), o.shape().as_ref()).map_or(0.0, |d| d.distance)
+    }
+
     /// Smallest distance between the capsule and any obstacle, culled: an obstacle whose
     /// bounding sphere is farther than the best distance so far (or than `stop`) is skipped.
     /// The result is exact when it is below `stop`; otherwise it is some value `≥ stop`.

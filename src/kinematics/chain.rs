@@ -32,8 +32,14 @@ enum Op {
     RotFree { axis: Axis, k: usize },
     /// Translation along a local axis by a constant.
     TransConst { axis: Axis, v: f64 },
-    /// Translation along a local axis by the free variable `k`.
-    TransFree { axis: Axis, k: usize },
+    /// Translation along a local axis by the free variable `k`; its rod runs from `lo` to `hi`
+    /// along the axis in the frame after it (see [`Chain::slider_rod`]).
+    TransFree {
+        axis: Axis,
+        k: usize,
+        lo: f64,
+        hi: f64,
+    },
 }
 
 #[derive(Clone, Debug)]
@@ -46,8 +52,23 @@ struct ChainLink {
     /// The link has at least one body segment.
     has_body: bool,
     ops: std::ops::Range<usize>,
-    slider: bool,
     segments: std::ops::Range<usize>,
+}
+
+/// Where one body segment of a chain sits, as the URDF export names it, and what moves it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SegmentInfo {
+    /// Link (from 1) that owns the segment.
+    pub link: usize,
+    /// The segment is moved by the first `level` free axes of the actuation vector (and by no
+    /// other): free axes are ordered along the chain, so this is always a prefix.
+    pub level: usize,
+    /// True for a slider rod or a constant translation piece (not part of the DH body).
+    pub slider: bool,
+    /// Name of the exported URDF link that carries it (see [`crate::kinematics::Chain`]).
+    pub frame: String,
+    /// End points in that URDF link's frame.
+    pub local: [Point3<f64>; 2],
 }
 
 /// A serial chain ready for forward kinematics: base pose, links, and the list of free axes that
@@ -77,6 +98,11 @@ pub struct Chain {
     radius: f64,
     colliders_per_link: usize,
     segment_count: usize,
+    segment_info: Vec<SegmentInfo>,
+    /// For each free axis, the [`SegmentInfo::frame`]-style name of the URDF link right after
+    /// it (the joint's child link).
+    axis_frames: Vec<String>,
+    layout: ArcLayout,
 }
 
 /// See [`Chain::arc_layout`].
@@ -90,6 +116,9 @@ pub struct ArcLayout {
     pub segment_link: Vec<usize>,
     /// True for slider segments (moved by their own link's axes too).
     pub segment_slider: Vec<bool>,
+    /// Arc position of the origin of the frame right after each free axis (actuation-vector
+    /// order): a bound on its distance along the chain from the base.
+    pub axis: Vec<f64>,
 }
 
 /// Caller-owned output of [`Chain::fk`]; allocate once with [`Chain::frames`] and reuse.
@@ -103,6 +132,9 @@ pub struct Frames {
     pub positions: Vec<Point3<f64>>,
     /// Body segments of all links in world coordinates; see [`Chain::link_segments`].
     pub segments: Vec<[Point3<f64>; 2]>,
+    /// The frame right after each free axis (actuation-vector order): the pose of that joint's
+    /// child link, which carries the bodies attached there.
+    pub axis_frames: Vec<IsometryMatrix3<f64>>,
 }
 
 impl Frames {
@@ -165,48 +197,152 @@ impl Chain {
         let mut free = Vec::new();
         let mut home = Vec::new();
         let mut chain_links = Vec::with_capacity(links.len());
-        let mut segment_count = 0;
+        let mut info: Vec<SegmentInfo> = Vec::new();
+        let mut axis_frames = Vec::new();
+        let mut layout = ArcLayout {
+            joint: Vec::with_capacity(links.len()),
+            segment_end: Vec::new(),
+            segment_link: Vec::new(),
+            segment_slider: Vec::new(),
+            axis: Vec::new(),
+        };
+        let mut arc = 0.0;
         for (i, link) in links.iter().enumerate() {
+            let n = i + 1;
             let start = ops.len();
-            let mut slider = false;
-            for axis in Axis::ALL {
-                let range = link.range(axis);
-                let op = if range.is_joint() {
-                    let k = free.len();
-                    free.push(FreeAxis {
-                        link: i + 1,
-                        axis,
-                        range,
-                    });
-                    home.push(range.home());
-                    if axis.is_rotation() {
-                        Op::RotFree { axis, k }
-                    } else {
-                        Op::TransFree { axis, k }
-                    }
-                } else if range.min == 0.0 {
-                    continue;
-                } else if axis.is_rotation() {
-                    let (s, c) = range.min.sin_cos();
-                    Op::RotConst { axis, s, c }
-                } else {
-                    Op::TransConst { axis, v: range.min }
-                };
-                slider |= !axis.is_rotation();
-                ops.push(op);
-            }
+            let level0 = free.len();
+            let present: Vec<(Axis, Range)> = Axis::ALL
+                .into_iter()
+                .map(|a| (a, link.range(a)))
+                .filter(|(_, r)| r.is_joint() || r.min != 0.0)
+                .collect();
+            let dh_frame = if present.is_empty() {
+                format!("link{n}")
+            } else {
+                format!("link{n}_dh")
+            };
+            // The body polyline (in F_{i-1}), carried by the joint frame F_{i-1}·T_i.
             let body = &link.geometry.body;
-            let n_seg = body.len().saturating_sub(1) + usize::from(slider);
+            let inv = link.geometry.transform.inverse();
+            let mut prev = Point3::origin();
+            for w in body.windows(2) {
+                arc += (w[1] - w[0]).norm();
+                layout.segment_end.push(arc);
+                layout.segment_link.push(n);
+                layout.segment_slider.push(false);
+                info.push(SegmentInfo {
+                    link: n,
+                    level: level0,
+                    slider: false,
+                    frame: dh_frame.clone(),
+                    local: [inv * w[0], inv * w[1]],
+                });
+                prev = w[1];
+            }
+            let _ = prev;
+            let joint_arc = arc;
+            layout.joint.push(joint_arc);
+            // Actuation: walk the axes as the URDF export does, to name the carrier of every
+            // translation piece.
+            let last_free = present.iter().rposition(|(_, r)| r.is_joint());
+            let mut current = dh_frame.clone();
+            let mut pending = IsometryMatrix3::identity();
+            let mut t_sum = 0.0; // largest travel of the translations so far in this link
+            let mut ext2 = 0.0;
+            for (m, &(axis, range)) in present.iter().enumerate() {
+                if !range.is_joint() {
+                    let v = range.min;
+                    if axis.is_rotation() {
+                        let (s, c) = v.sin_cos();
+                        ops.push(Op::RotConst { axis, s, c });
+                        pending *= IsometryMatrix3::from_parts(
+                            nalgebra::Translation3::identity(),
+                            Rotation3::from_axis_angle(
+                                &nalgebra::Unit::new_unchecked(axis.direction()),
+                                v,
+                            ),
+                        );
+                    } else {
+                        ops.push(Op::TransConst { axis, v });
+                        let from = Point3::from(pending.translation.vector);
+                        pending *= nalgebra::Translation3::from(axis.direction() * v);
+                        let to = Point3::from(pending.translation.vector);
+                        t_sum += v.abs();
+                        ext2 += v * v;
+                        layout.segment_end.push(joint_arc + t_sum);
+                        layout.segment_link.push(n);
+                        layout.segment_slider.push(true);
+                        info.push(SegmentInfo {
+                            link: n,
+                            level: free.len(),
+                            slider: true,
+                            frame: current.clone(),
+                            local: [from, to],
+                        });
+                    }
+                    continue;
+                }
+                let k = free.len();
+                free.push(FreeAxis {
+                    link: n,
+                    axis,
+                    range,
+                });
+                home.push(range.home());
+                let child = if Some(m) == last_free && m + 1 == present.len() {
+                    format!("link{n}")
+                } else {
+                    format!("link{n}_{}", axis.name())
+                };
+                if axis.is_rotation() {
+                    ops.push(Op::RotFree { axis, k });
+                    layout.axis.push(joint_arc + t_sum);
+                } else {
+                    let (lo, hi) = Self::slider_rod(range);
+                    ops.push(Op::TransFree { axis, k, lo, hi });
+                    let reach = [
+                        range.min + lo,
+                        range.min + hi,
+                        range.max + lo,
+                        range.max + hi,
+                    ]
+                    .into_iter()
+                    .fold(0.0, |m: f64, x| m.max(x.abs()));
+                    layout.segment_end.push(joint_arc + t_sum + reach);
+                    layout.segment_link.push(n);
+                    layout.segment_slider.push(true);
+                    let travel = range.min.abs().max(range.max.abs());
+                    t_sum += travel;
+                    ext2 += travel * travel;
+                    layout.axis.push(joint_arc + t_sum);
+                    let dir = axis.direction();
+                    info.push(SegmentInfo {
+                        link: n,
+                        level: k + 1,
+                        slider: true,
+                        frame: child.clone(),
+                        local: [Point3::from(dir * lo), Point3::from(dir * hi)],
+                    });
+                }
+                axis_frames.push(child.clone());
+                pending = IsometryMatrix3::identity();
+                current = child;
+            }
+            arc = joint_arc + ext2.sqrt();
+            let n_seg = info.len()
+                - chain_links
+                    .iter()
+                    .map(|l: &ChainLink| l.segments.len())
+                    .sum::<usize>();
+            let seg_start = info.len() - n_seg;
             chain_links.push(ChainLink {
                 transform: link.geometry.transform,
                 identity_rotation: link.geometry.transform.rotation == Rotation3::identity(),
                 knees: body[1..body.len().saturating_sub(1).max(1)].to_vec(),
                 has_body: body.len() > 1,
                 ops: start..ops.len(),
-                slider,
-                segments: segment_count..segment_count + n_seg,
+                segments: seg_start..info.len(),
             });
-            segment_count += n_seg;
         }
         Chain {
             base,
@@ -216,8 +352,30 @@ impl Chain {
             home,
             radius,
             colliders_per_link,
-            segment_count,
+            segment_count: info.len(),
+            segment_info: info,
+            axis_frames,
+            layout,
         }
+    }
+
+    /// The rod of a prismatic axis with range `[min, max]`: a fixed-length body on the joint's
+    /// child link, from `lo` to `hi` along the axis in the child's frame, with
+    /// `lo = min(−max, 0)` and `hi = max(−min, 0)`. Whatever the joint value `q`, it covers the
+    /// stretch from the joint origin (at `−q` in the child's frame) to the child's origin, and it
+    /// is exactly what the URDF export writes, so the planner checks the exported body.
+    pub fn slider_rod(range: Range) -> (f64, f64) {
+        ((-range.max).min(0.0), (-range.min).max(0.0))
+    }
+
+    /// Where body segment `s` sits and what moves it.
+    pub fn segment_info(&self, s: usize) -> &SegmentInfo {
+        &self.segment_info[s]
+    }
+
+    /// The URDF link names of the frames right after each free axis (actuation-vector order).
+    pub fn axis_frame_names(&self) -> &[String] {
+        &self.axis_frames
     }
 
     /// Number of links `n`.
@@ -280,10 +438,7 @@ impl Chain {
 
     /// Link index (from 1) that owns segment `s`.
     pub fn segment_link(&self, s: usize) -> usize {
-        self.links
-            .iter()
-            .position(|l| l.segments.contains(&s))
-            .map_or(0, |i| i + 1)
+        self.segment_info.get(s).map_or(0, |i| i.link)
     }
 
     /// Arc-length layout of the body, the basis of configuration-independent motion bounds:
@@ -292,51 +447,12 @@ impl Chain {
     /// translation axes. Any two points of the body are at most their arc-length difference
     /// apart, in every configuration (triangle inequality along the chain).
     pub fn arc_layout(&self) -> ArcLayout {
-        let mut pos = 0.0;
-        let mut joint = Vec::with_capacity(self.links.len());
-        let mut segment_end = Vec::with_capacity(self.segment_count);
-        let mut segment_link = Vec::with_capacity(self.segment_count);
-        let mut segment_slider = Vec::with_capacity(self.segment_count);
-        for (i, link) in self.links.iter().enumerate() {
-            let end = Point3::from(link.transform.translation.vector);
-            let mut prev = Point3::origin();
-            for p in link
-                .knees
-                .iter()
-                .copied()
-                .chain(link.has_body.then_some(end))
-            {
-                pos += (p - prev).norm();
-                prev = p;
-                segment_end.push(pos);
-                segment_link.push(i + 1);
-                segment_slider.push(false);
-            }
-            joint.push(pos);
-            if link.slider {
-                let mut ext2 = 0.0;
-                for op in &self.ops[link.ops.clone()] {
-                    match *op {
-                        Op::TransConst { v, .. } => ext2 += v * v,
-                        Op::TransFree { k, .. } => {
-                            let r = self.free[k].range;
-                            ext2 += r.min.abs().max(r.max.abs()).powi(2);
-                        }
-                        _ => {}
-                    }
-                }
-                pos += ext2.sqrt();
-                segment_end.push(pos);
-                segment_link.push(i + 1);
-                segment_slider.push(true);
-            }
-        }
-        ArcLayout {
-            joint,
-            segment_end,
-            segment_link,
-            segment_slider,
-        }
+        self.layout.clone()
+    }
+
+    /// The arc layout without a copy (see [`Chain::arc_layout`]).
+    pub fn layout(&self) -> &ArcLayout {
+        &self.layout
     }
 
     /// A frame buffer sized for this chain, to pass to [`Chain::fk`].
@@ -347,6 +463,7 @@ impl Chain {
             joints: vec![Point3::origin(); n],
             positions: vec![Point3::origin(); n],
             segments: vec![[Point3::origin(); 2]; self.segment_count],
+            axis_frames: vec![self.base; self.free.len()],
         }
     }
 
@@ -389,22 +506,36 @@ impl Chain {
                 seg += 1;
             }
             out.joints[i] = joint;
-            // Actuation T_act,i.
+            // Actuation T_act,i; every translation adds its piece of the body.
             for op in &self.ops[link.ops.clone()] {
                 match *op {
                     Op::RotConst { axis, s, c } => rotate_local(&mut rot, axis, s, c),
                     Op::RotFree { axis, k } => {
                         let (s, c) = libm::sincos(a[k]);
                         rotate_local(&mut rot, axis, s, c);
+                        let f = &mut out.axis_frames[k];
+                        f.translation.vector = pos;
+                        *f.rotation.matrix_mut_unchecked() = rot;
                     }
-                    Op::TransConst { axis, v } => pos += rot.column(axis.index() - 3) * v,
-                    Op::TransFree { axis, k } => pos += rot.column(axis.index() - 3) * a[k],
+                    Op::TransConst { axis, v } => {
+                        let from = Point3::from(pos);
+                        pos += rot.column(axis.index() - 3) * v;
+                        out.segments[seg] = [from, Point3::from(pos)];
+                        seg += 1;
+                    }
+                    Op::TransFree { axis, k, lo, hi } => {
+                        let dir = rot.column(axis.index() - 3).into_owned();
+                        pos += dir * a[k];
+                        out.segments[seg] =
+                            [Point3::from(pos + dir * lo), Point3::from(pos + dir * hi)];
+                        seg += 1;
+                        let f = &mut out.axis_frames[k];
+                        f.translation.vector = pos;
+                        *f.rotation.matrix_mut_unchecked() = rot;
+                    }
                 }
             }
             let origin = Point3::from(pos);
-            if link.slider {
-                out.segments[seg] = [joint, origin];
-            }
             out.positions[i] = origin;
             let f = &mut out.frames[i + 1];
             f.translation.vector = pos;
@@ -438,7 +569,7 @@ impl Chain {
                         rotate_local(&mut rot, axis, s, c);
                     }
                     Op::TransConst { .. } => {}
-                    Op::TransFree { axis, k } => {
+                    Op::TransFree { axis, k, .. } => {
                         let d = rot.column(axis.index() - 3).into_owned();
                         out[3 * k..3 * k + 3].copy_from_slice(d.as_slice());
                     }
@@ -631,7 +762,7 @@ mod tests {
     }
 
     #[test]
-    fn slider_segment_covers_the_prismatic_extension() {
+    fn slider_rod_is_fixed_length_and_covers_the_extension() {
         let link = Link::from_dh(
             &Dh {
                 a: 1.0,
@@ -643,9 +774,27 @@ mod tests {
         assert_eq!(chain.segment_count(), 2);
         let mut f = chain.frames();
         chain.fk(&[0.4], &mut f);
-        assert_relative_eq!(f.segments[1][0], Point3::new(1.0, 0.0, 0.0));
+        // The rod is the stroke (0.5 m) long and ends at F_1's origin: it reaches back past
+        // the joint origin (1.0) and never changes length.
+        assert_relative_eq!(
+            f.segments[1][0],
+            Point3::new(0.9, 0.0, 0.0),
+            epsilon = 1e-15
+        );
         assert_relative_eq!(f.segments[1][1], Point3::new(1.4, 0.0, 0.0));
         assert_relative_eq!(f.end_effector(), Point3::new(1.4, 0.0, 0.0));
         assert_eq!(chain.segment_link(1), 1);
+        for q in [0.0, 0.25, 0.5] {
+            chain.fk(&[q], &mut f);
+            let [a, b] = f.segments[1];
+            assert_relative_eq!((b - a).norm(), 0.5, epsilon = 1e-15);
+            assert!(a.x <= 1.0 + 1e-15 && b.x >= 1.0 + q - 1e-15);
+        }
+        let info = chain.segment_info(1);
+        assert_eq!(
+            (info.level, info.slider, info.frame.as_str()),
+            (1, true, "link1")
+        );
+        assert_eq!(info.local, [Point3::new(-0.5, 0.0, 0.0), Point3::origin()]);
     }
 }

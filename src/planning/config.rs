@@ -1,14 +1,14 @@
 //! Planner settings (the `[planner]` section of a scenario).
 
 use super::schedule::Schedule;
-use crate::collision::{BodyModel, CheckerKind};
+use crate::collision::{BodyModel, CheckerKind, SelfCollisionConfig};
 use serde::{Deserialize, Serialize};
 
 /// The `[planner]` section: the RRT that decides reachability (paper §II-D, Eq. 10).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PlannerConfig {
-    /// Edge checker. Default `segment`.
+    /// Edge checker. Default `certified`, the only one whose "free" is a proof.
     pub checker: CheckerKind,
     /// Body model used by the `discrete` and `segment` checkers: `capsules` (the real body) or
     /// `points` (the paper's point colliders). Default `capsules`.
@@ -33,12 +33,15 @@ pub struct PlannerConfig {
     /// Default: constant.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub schedule: Option<Schedule>,
+    /// Self-collision settings, from the scenario's `[robot]` section (not a `[planner]` key).
+    #[serde(skip)]
+    pub self_collision: SelfCollisionConfig,
 }
 
 impl Default for PlannerConfig {
     fn default() -> Self {
         PlannerConfig {
-            checker: CheckerKind::Segment,
+            checker: CheckerKind::Certified,
             body: BodyModel::Capsules,
             l_max: std::f64::consts::FRAC_PI_4,
             lambda: 0.1,
@@ -48,6 +51,7 @@ impl Default for PlannerConfig {
             time_limit: None,
             ik_steps: 20,
             schedule: None,
+            self_collision: SelfCollisionConfig::default(),
         }
     }
 }

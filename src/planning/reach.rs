@@ -3,7 +3,7 @@
 
 use super::rrt::Rrt;
 use super::PlannerConfig;
-use crate::collision::{make_checker, CollisionScene, Scratch};
+use crate::collision::{make_checker, CollisionScene, RobotBody, Scratch};
 use crate::kinematics::Chain;
 use nalgebra::Point3;
 use rand::SeedableRng;
@@ -84,17 +84,26 @@ pub fn planner_rng(seed: u64, stream: u64) -> ChaCha8Rng {
     rng
 }
 
-/// Names the first body segment at home that is within the clearance of an obstacle.
-fn home_collision(scene: &CollisionScene, chain: &Chain) -> String {
+/// Says why the home pose is blocked: the first body within the clearance of an obstacle, or
+/// the first checked self pair in contact, naming the links.
+fn home_collision(scene: &CollisionScene, chain: &Chain, body: &RobotBody) -> String {
+    if let Some((a, b)) = body.acm().home_fold() {
+        return format!(
+            "home pose self-collides: the bodies of link {a} and link {b} cross each other"
+        );
+    }
     let mut frames = chain.frames();
+    let mut placed = crate::collision::body::Placed::default();
     chain.fk(chain.home(), &mut frames);
-    for (s, seg) in frames.segments.iter().enumerate() {
+    body.place(chain, &frames, &mut placed);
+    for b in 0..body.len() {
         for (k, o) in scene.obstacles().iter().enumerate() {
-            let d = scene.distance(k, &seg[0], &seg[1], chain.radius());
+            let d = body.obstacle_distance(scene, &frames, &placed, b, k);
             if d <= scene.clearance() {
                 return format!(
-                    "home pose collides: link {} is {:.4} m from obstacle[{k}] ({}), clearance {} m",
-                    chain.segment_link(s),
+                    "home pose collides: link {} ({}) is {:.4} m from obstacle[{k}] ({}), clearance {} m",
+                    body.link(b),
+                    body.frame(b),
                     d.max(0.0),
                     o.name,
                     scene.clearance()
@@ -102,12 +111,22 @@ fn home_collision(scene: &CollisionScene, chain: &Chain) -> String {
             }
         }
     }
+    if let Some((p, q, _)) = body.self_contact(&frames, &placed) {
+        return format!(
+            "home pose self-collides: link {} ({}) touches link {} ({})",
+            body.link(p),
+            body.frame(p),
+            body.link(q),
+            body.frame(q)
+        );
+    }
     "home pose collides (a point collider is within the clearance of an obstacle)".into()
 }
 
 /// Evaluates the reachability of `chain` over `tasks` in `scene` with the planner settings
 /// `config` (its checker, body model, `l_max`, iterations, …) and the random stream
-/// `(seed, stream)`. A design whose home pose collides has `R = 0` and says why.
+/// `(seed, stream)`. The robot body is the chain's capsules with the self-collision settings of
+/// `config`. A design whose home pose collides or self-collides has `R = 0` and says why.
 pub fn reachability(
     chain: &Chain,
     scene: &Arc<CollisionScene>,
@@ -116,10 +135,30 @@ pub fn reachability(
     seed: u64,
     stream: u64,
 ) -> ReachReport {
+    let body = Arc::new(RobotBody::new(chain, Vec::new(), &config.self_collision));
+    reachability_of(chain, body, scene, tasks, config, seed, stream)
+}
+
+/// As [`reachability`], for a given robot body of `chain` (for example an imported arm's
+/// collision meshes).
+pub fn reachability_of(
+    chain: &Chain,
+    body: Arc<RobotBody>,
+    scene: &Arc<CollisionScene>,
+    tasks: &[Point3<f64>],
+    config: &PlannerConfig,
+    seed: u64,
+    stream: u64,
+) -> ReachReport {
     let checker = make_checker(config.checker, scene.clone(), config.body);
-    let mut scratch = Scratch::new(chain);
+    let mut scratch = Scratch::with_body(chain, body.clone());
     let mut rng = planner_rng(seed, stream);
-    let growth = Rrt::new(chain, checker.as_ref(), config, tasks).grow(&mut rng, &mut scratch);
+    let folded = body.acm().home_fold().is_some();
+    let growth = if folded {
+        super::rrt::Growth::blocked(chain, tasks.len())
+    } else {
+        Rrt::new(chain, checker.as_ref(), config, tasks).grow(&mut rng, &mut scratch)
+    };
     let names = chain.joint_names();
     let tree = &growth.tree;
     let targets: Vec<TargetReport> = tasks
@@ -160,7 +199,9 @@ pub fn reachability(
         nodes: tree.len(),
         node_checks: scratch.stats.nodes,
         edge_checks: scratch.stats.edges,
-        home_blocked: growth.home_blocked.then(|| home_collision(scene, chain)),
+        home_blocked: growth
+            .home_blocked
+            .then(|| home_collision(scene, chain, &body)),
         targets,
     }
 }

@@ -149,6 +149,19 @@ pub struct Growth {
     pub home_blocked: bool,
 }
 
+impl Growth {
+    /// The outcome when the home configuration is blocked before planning starts: an empty
+    /// tree, nothing reached.
+    pub fn blocked(chain: &Chain, tasks: usize) -> Self {
+        Growth {
+            tree: Tree::new(chain),
+            reached: vec![None; tasks],
+            iterations: 0,
+            home_blocked: true,
+        }
+    }
+}
+
 /// Reused buffers of the planner.
 struct Work {
     frames: Frames,

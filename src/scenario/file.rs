@@ -162,6 +162,25 @@ pub struct RobotSpec {
     /// Per-link overrides.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub link: Vec<LinkSpec>,
+    /// Check the arm's bodies against each other. Default true.
+    #[serde(default = "default_true")]
+    pub self_collision: bool,
+    /// Pairs of links (from 1; 0 is the base) never checked against each other, on top of
+    /// the computed allowed-collision matrix. Default none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub allowed_collisions: Vec<[usize; 2]>,
+    /// Random configurations sampled for the "Always in collision" rule of the
+    /// allowed-collision matrix. Default 1000.
+    #[serde(default = "default_self_samples")]
+    pub self_collision_samples: usize,
+}
+
+fn default_true() -> bool {
+    true
+}
+
+fn default_self_samples() -> usize {
+    1000
 }
 
 /// Obstacle shape kinds accepted in `[[obstacle]] shape = …`.

@@ -220,13 +220,38 @@ impl Scenario {
         if let Some(n) = o.evaluations {
             check(n > 0, "optimizer.evaluations", n, "must be at least 1")?;
         }
+        let r = &spec.robot;
+        for (k, &[a, b]) in r.allowed_collisions.iter().enumerate() {
+            for v in [a, b] {
+                if v > r.links {
+                    return Err(Error::invalid(
+                        format!("robot.allowed_collisions[{k}]"),
+                        format!("[{a}, {b}]"),
+                        format!("links run from 0 (the base) to {}", r.links),
+                    ));
+                }
+            }
+        }
+        check(
+            r.self_collision_samples <= 1_000_000,
+            "robot.self_collision_samples",
+            r.self_collision_samples,
+            "must be at most 1000000",
+        )?;
+        let mut planner = spec.planner.clone();
+        planner.self_collision = crate::collision::SelfCollisionConfig {
+            enabled: r.self_collision,
+            allowed: r.allowed_collisions.clone(),
+            samples: r.self_collision_samples,
+            seed: spec.seed,
+        };
         Ok(Scenario {
             name: spec.name.clone().unwrap_or_else(|| "scenario".into()),
             path: None,
             seed: spec.seed,
             space,
             workspace,
-            planner: spec.planner.clone(),
+            planner,
             objective: spec.objective.clone(),
             optimizer: spec.optimizer.clone(),
         })

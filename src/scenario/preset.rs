@@ -173,6 +173,9 @@ pub fn generate(preset: Preset, seed: u64) -> ScenarioSpec {
                 ..LinkSpec::default()
             },
             link: Vec::new(),
+            self_collision: true,
+            allowed_collisions: Vec::new(),
+            self_collision_samples: 1000,
         },
         planner: PlannerConfig::default(),
         objective: ObjectiveWeights::default(),

@@ -1,5 +1,5 @@
-//! `ccd`: continuous collision detection of the link capsules with parry's nonlinear shape
-//! casts.
+//! `ccd`: continuous collision detection of every robot body with parry's nonlinear shape
+//! casts, against the obstacles and over the checked self pairs.
 //!
 //! parry's [`NonlinearRigidMotion`] moves a body with constant linear and angular velocity about
 //! one centre. That is not the motion of a link under linear joint interpolation (a link far down
@@ -11,21 +11,23 @@
 //! **Sub-step rule:** `n = clamp(⌈θ / 0.2 rad⌉, 1, 64)`, with `θ = Σ |Δa_j|` over the rotation
 //! axes of the step: no link turns more than 0.2 rad relative to the base within a sub-step.
 //!
-//! Each capsule (radius inflated by the clearance `ε`, since the nonlinear cast has no target
-//! distance) is cast against each obstacle the broad phase cannot rule out (its bounding sphere
-//! farther than the chain's motion bound for the sub-step). A hit, an initial penetration, or a
-//! `Failed` status counts as a collision. What this still misses is measured against the oracle
+//! Each body rides on its carrier frame (the frame after the last free axis that moves it, or
+//! the base). Each capsule (radius inflated by the clearance `ε`, since the nonlinear cast has no
+//! target distance) is cast against each obstacle the broad phase cannot rule out (its bounding
+//! sphere farther than the body's motion bound for the sub-step); a solid is cast as it is and
+//! also checked at the sub-step's end with the clearance. Self pairs are cast against each other,
+//! both moving. A hit, an initial penetration, or a `Failed` status counts as a collision. What this still misses is measured against the oracle
 //! (see the README).
 
 use super::{EdgeChecker, Scratch};
-use crate::collision::body::BodyModel;
+use crate::collision::body::{BodyModel, RobotBody};
 use crate::collision::scene::CollisionScene;
 use crate::kinematics::{Chain, Frames};
 use crate::world::convert::{to_parry_point, to_parry_pose};
-use nalgebra::{IsometryMatrix3, Point3, Translation3, UnitQuaternion};
+use nalgebra::{IsometryMatrix3, Point3, UnitQuaternion};
 use parry3d_f64::math::Vector;
 use parry3d_f64::query::{self, NonlinearRigidMotion, ShapeCastStatus};
-use parry3d_f64::shape::Capsule;
+use parry3d_f64::shape::{Capsule, Shape};
 use std::sync::Arc;
 
 /// Largest total joint rotation (radians) within one sub-step.
@@ -46,19 +48,20 @@ impl Ccd {
     }
 }
 
-/// The rigid frame carrying segment `s` and the segment's end points in it: link bodies ride on
-/// `F_{k−1}`, sliders on the joint frame (rotation of `F_k`, origin at the joint).
-fn segment_frame(chain: &Chain, frames: &Frames, s: usize, slider: bool) -> IsometryMatrix3<f64> {
-    let link = chain.segment_link(s);
-    if slider {
-        let f = &frames.frames[link];
-        IsometryMatrix3::from_parts(
-            Translation3::from(frames.joints[link - 1].coords),
-            f.rotation,
-        )
-    } else {
-        frames.frames[link - 1]
+/// The rigid carrier frame of body `b`: the frame after free axis `level − 1`, or the base.
+fn carrier<'a>(body: &RobotBody, frames: &'a Frames, b: usize) -> &'a IsometryMatrix3<f64> {
+    match body.level(b) {
+        0 => &frames.frames[0],
+        l => &frames.axis_frames[l - 1],
     }
+}
+
+/// One body's motion over a sub-step, with its capsule in the carrier frame (segments only).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Moving {
+    motion: NonlinearRigidMotion,
+    a: Point3<f64>,
+    b: Point3<f64>,
 }
 
 /// Number of sub-steps for a step `delta` (see the module documentation).
@@ -71,6 +74,60 @@ pub fn substeps(chain: &Chain, delta: &[f64]) -> usize {
         .map(|(_, d)| d.abs())
         .sum();
     ((theta / MAX_SUBSTEP_ROTATION).ceil() as usize).clamp(1, MAX_SUBSTEPS)
+}
+
+/// The motions of every body from the frames `fa` to `fb` (parry's constant-velocity model
+/// about each body's centre), into `out`.
+fn motions(body: &RobotBody, fa: &Frames, fb: &Frames, out: &mut Vec<Moving>) {
+    out.clear();
+    let ns = body.segments();
+    for b in 0..body.len() {
+        let g0 = carrier(body, fa, b);
+        let g1 = carrier(body, fb, b);
+        let (la, lb, center) = if b < ns {
+            let [wa, wb] = fa.segments[b];
+            let la = g0.inverse_transform_point(&wa);
+            let lb = g0.inverse_transform_point(&wb);
+            (la, lb, nalgebra::center(&la, &lb))
+        } else {
+            let s = &body.solids()[b - ns];
+            (Point3::origin(), Point3::origin(), s.center)
+        };
+        let c0 = g0 * center;
+        let c1 = g1 * center;
+        let rot = UnitQuaternion::from_rotation_matrix(&(g1.rotation * g0.rotation.inverse()));
+        let w = rot.scaled_axis();
+        let start = if b < ns {
+            to_parry_pose(g0)
+        } else {
+            to_parry_pose(&(g0 * body.solids()[b - ns].local))
+        };
+        let local_center = if b < ns {
+            center
+        } else {
+            body.solids()[b - ns].local.inverse_transform_point(&center)
+        };
+        out.push(Moving {
+            motion: NonlinearRigidMotion::new(
+                start,
+                to_parry_point(&local_center),
+                Vector::new(c1.x - c0.x, c1.y - c0.y, c1.z - c0.z),
+                Vector::new(w.x, w.y, w.z),
+            ),
+            a: la,
+            b: lb,
+        });
+    }
+}
+
+/// parry's verdict on a cast: `true` for a hit within the sub-step (or a failure).
+fn hit(result: Result<Option<query::ShapeCastHit>, query::Unsupported>) -> Option<bool> {
+    match result {
+        Ok(None) => Some(false),
+        Ok(Some(h)) if h.status == ShapeCastStatus::Failed => Some(true),
+        Ok(Some(h)) => Some(h.time_of_impact <= 1.0),
+        Err(_) => None,
+    }
 }
 
 impl EdgeChecker for Ccd {
@@ -86,7 +143,6 @@ impl EdgeChecker for Ccd {
         scratch.stats.edges += 1;
         let scene = &*self.scene;
         let eps = scene.clearance();
-        let radius = chain.radius() + eps;
         let Scratch {
             fa,
             fb,
@@ -94,12 +150,19 @@ impl EdgeChecker for Ccd {
             bounds,
             certified: work,
             stats,
+            body,
+            pa,
+            pb,
+            ccd: moving,
             ..
         } = scratch;
+        let body = &**body;
+        let ns = body.segments();
         work.prepare(bounds, from, to);
         let n = substeps(chain, &work.delta);
         stats.fk += 1;
         chain.fk(from, fa);
+        body.place(chain, fa, pa);
         for i in 0..n {
             let t1 = (i + 1) as f64 / n as f64;
             for ((qi, a), b) in q.iter_mut().zip(from).zip(to) {
@@ -107,64 +170,90 @@ impl EdgeChecker for Ccd {
             }
             stats.fk += 1;
             chain.fk(q, fb);
-            for s in 0..chain.segment_count() {
-                let slider = bounds.is_slider(s);
-                let g0 = segment_frame(chain, fa, s, slider);
-                let g1 = segment_frame(chain, fb, s, slider);
-                let [w0a, w0b] = fa.segments[s];
-                let [w1a, w1b] = fb.segments[s];
-                // Local end points; a slider's length changes: take the longer of its two ends.
-                let la = g0.inverse_transform_point(&w0a);
-                let lb0 = g0.inverse_transform_point(&w0b);
-                let lb1 = g1.inverse_transform_point(&w1b);
-                let lb = if lb1.coords.norm() > lb0.coords.norm() {
-                    lb1
+            body.place(chain, fb, pb);
+            motions(body, fa, fb, moving);
+            for (b, m) in moving.iter().enumerate() {
+                let step_reach = work.reach[b] / n as f64;
+                let capsule;
+                let shape: &dyn Shape = if b < ns {
+                    capsule = Capsule::new(
+                        to_parry_point(&m.a),
+                        to_parry_point(&m.b),
+                        body.radius(b) + eps,
+                    );
+                    &capsule
                 } else {
-                    lb0
+                    body.solids()[b - ns].shape.as_ref()
                 };
-                let step_reach = work.reach[s] / n as f64;
-                let capsule = Capsule::new(to_parry_point(&la), to_parry_point(&lb), radius);
-                let center = Point3::from((la.coords + lb.coords) * 0.5);
-                let c0 = g0 * center;
-                let c1 = g1 * center;
-                let rot =
-                    UnitQuaternion::from_rotation_matrix(&(g1.rotation * g0.rotation.inverse()));
-                let w = rot.scaled_axis();
-                let motion = NonlinearRigidMotion::new(
-                    to_parry_pose(&g0),
-                    to_parry_point(&center),
-                    Vector::new(c1.x - c0.x, c1.y - c0.y, c1.z - c0.z),
-                    Vector::new(w.x, w.y, w.z),
-                );
                 for k in 0..scene.len() {
-                    if scene.lower_bound(k, &w0a, &w0b, chain.radius()) - eps > step_reach {
+                    if body.obstacle_lower_bound(scene, fa, pa, b, k) - eps > step_reach {
                         continue;
                     }
                     let o = &scene.obstacles()[k];
                     let still = NonlinearRigidMotion::constant_position(*o.pose());
-                    match query::cast_shapes_nonlinear(
-                        &motion,
-                        &capsule,
+                    let cast = query::cast_shapes_nonlinear(
+                        &m.motion,
+                        shape,
                         &still,
                         o.shape().as_ref(),
                         0.0,
                         1.0,
                         true,
-                    ) {
-                        Ok(None) => {}
-                        Ok(Some(hit)) if hit.status == ShapeCastStatus::Failed => return false,
-                        Ok(Some(hit)) if hit.time_of_impact <= 1.0 => return false,
-                        Ok(Some(_)) => {}
-                        Err(_) => {
-                            // Unsupported pair: fall back to the capsule at the sub-step's end.
-                            if scene.distance(k, &w1a, &w1b, chain.radius()) <= eps {
-                                return false;
-                            }
-                        }
+                    );
+                    let blocked = match hit(cast) {
+                        Some(h) => h,
+                        None => body.obstacle_distance(scene, fb, pb, b, k) <= eps,
+                    };
+                    let end_hit = b >= ns && body.obstacle_distance(scene, fb, pb, b, k) <= eps;
+                    if blocked || end_hit {
+                        return false;
                     }
                 }
             }
+            for &(p, qb) in body.self_pairs() {
+                let (p, qb) = (p as usize, qb as usize);
+                let reach = bounds.relative(qb, body.level(p), &work.delta) / n as f64;
+                let (cp, rp) = body.ball(fa, pa, p);
+                let (cq, rq) = body.ball(fa, pa, qb);
+                if (cp - cq).norm() - rp - rq > reach {
+                    continue;
+                }
+                let (cap_p, cap_q);
+                let sp: &dyn Shape = if p < ns {
+                    let m = &moving[p];
+                    cap_p =
+                        Capsule::new(to_parry_point(&m.a), to_parry_point(&m.b), body.radius(p));
+                    &cap_p
+                } else {
+                    body.solids()[p - ns].shape.as_ref()
+                };
+                let sq: &dyn Shape = if qb < ns {
+                    let m = &moving[qb];
+                    cap_q =
+                        Capsule::new(to_parry_point(&m.a), to_parry_point(&m.b), body.radius(qb));
+                    &cap_q
+                } else {
+                    body.solids()[qb - ns].shape.as_ref()
+                };
+                let cast = query::cast_shapes_nonlinear(
+                    &moving[p].motion,
+                    sp,
+                    &moving[qb].motion,
+                    sq,
+                    0.0,
+                    1.0,
+                    true,
+                );
+                let blocked = match hit(cast) {
+                    Some(h) => h,
+                    None => body.pair_distance(fb, pb, p, qb) <= 0.0,
+                };
+                if blocked || body.pair_distance(fb, pb, p, qb) <= 0.0 {
+                    return false;
+                }
+            }
             std::mem::swap(fa, fb);
+            std::mem::swap(pa, pb);
         }
         true
     }

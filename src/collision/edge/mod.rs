@@ -16,14 +16,12 @@ pub mod certified;
 pub mod discrete;
 pub mod segment;
 
-use super::body::BodyModel;
+use super::body::{BodyModel, MotionBounds, Placed, RobotBody};
 use super::scene::CollisionScene;
 use crate::kinematics::{Chain, Frames};
 use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
-
-pub use certified::MotionBounds;
 
 /// Edge-checking strategy, chosen by name in `planner.checker` and `--checker`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -32,11 +30,12 @@ pub enum CheckerKind {
     /// End configuration only (the paper's §IV baseline; safe only with a small `L_max`).
     Discrete,
     /// The paper's §III-A fast path: point colliders and the segments they sweep.
-    #[default]
     Segment,
     /// Continuous collision detection of the link capsules with parry shape casts.
     Ccd,
-    /// Conservative advancement with chain motion bounds: free only when proven free.
+    /// Conservative advancement with chain motion bounds: free only when proven free (the
+    /// default).
+    #[default]
     Certified,
 }
 
@@ -101,15 +100,26 @@ pub struct Scratch {
     pub(crate) colliders: Vec<Point3<f64>>,
     pub(crate) colliders_b: Vec<Point3<f64>>,
     pub(crate) near: Vec<u32>,
+    pub(crate) body: Arc<RobotBody>,
+    pub(crate) pa: Placed,
+    pub(crate) pb: Placed,
+    pub(crate) pm: Placed,
     pub(crate) bounds: MotionBounds,
     pub(crate) certified: certified::Work,
+    pub(crate) ccd: Vec<ccd::Moving>,
     /// Counters since creation.
     pub stats: EdgeStats,
 }
 
 impl Scratch {
-    /// Scratch space sized for `chain`.
+    /// Scratch space sized for `chain`, whose body is its capsules with the default
+    /// self-collision settings ([`RobotBody::of_chain`]).
     pub fn new(chain: &Chain) -> Self {
+        Self::with_body(chain, Arc::new(RobotBody::of_chain(chain)))
+    }
+
+    /// Scratch space for `chain` with the robot body `body` (built for that chain).
+    pub fn with_body(chain: &Chain, body: Arc<RobotBody>) -> Self {
         Scratch {
             fa: chain.frames(),
             fb: chain.frames(),
@@ -118,10 +128,20 @@ impl Scratch {
             colliders: Vec::new(),
             colliders_b: Vec::new(),
             near: Vec::new(),
-            bounds: MotionBounds::new(chain),
+            bounds: MotionBounds::new(chain, &body),
+            body,
+            pa: Placed::default(),
+            pb: Placed::default(),
+            pm: Placed::default(),
             certified: certified::Work::default(),
+            ccd: Vec::new(),
             stats: EdgeStats::default(),
         }
+    }
+
+    /// The robot body checked.
+    pub fn body(&self) -> &Arc<RobotBody> {
+        &self.body
     }
 }
 
@@ -147,10 +167,15 @@ pub(crate) fn node_free_with(
     scratch.stats.nodes += 1;
     scratch.stats.fk += 1;
     chain.fk(a, &mut scratch.fa);
+    scratch.body.place(chain, &scratch.fa, &mut scratch.pa);
     match body {
-        BodyModel::Capsules => {
-            super::body::capsules_free(scene, chain, &scratch.fa, &mut scratch.near)
-        }
+        BodyModel::Capsules => super::body::bodies_free(
+            scene,
+            &scratch.body,
+            &scratch.fa,
+            &scratch.pa,
+            &mut scratch.near,
+        ),
         BodyModel::Points => {
             chain.colliders(&scratch.fa, &mut scratch.colliders);
             super::body::points_free(
@@ -159,7 +184,13 @@ pub(crate) fn node_free_with(
                 &scratch.fa,
                 &scratch.colliders,
                 &mut scratch.near,
-            )
+            ) && super::body::solids_free(
+                scene,
+                &scratch.body,
+                &scratch.fa,
+                &scratch.pa,
+                &mut scratch.near,
+            ) && super::body::self_free(&scratch.body, &scratch.fa, &scratch.pa)
         }
     }
 }

@@ -13,9 +13,12 @@
 //! (π/3 or less) for this reason. Between the points the body is not checked at all, also at
 //! the end configuration: [`EdgeChecker::node_free`] (which the planner calls on every new
 //! node) checks the configured body model there.
+//!
+//! Solids (convex link meshes and primitives) and the self-collision pairs have no swept-point
+//! form: they are checked at the edge's midpoint and at its end, with the exact distances.
 
 use super::{EdgeChecker, Scratch};
-use crate::collision::body::{enclosing_ball, link_points, BodyModel};
+use crate::collision::body::{enclosing_ball, link_points, self_free, solids_free, BodyModel};
 use crate::collision::scene::CollisionScene;
 use crate::kinematics::Chain;
 use std::sync::Arc;
@@ -50,9 +53,13 @@ impl EdgeChecker for SegmentChecker {
         let Scratch {
             fa,
             fb,
+            fm,
+            q,
             colliders,
             colliders_b,
             near,
+            body,
+            pm,
             ..
         } = scratch;
         chain.fk(from, fa);
@@ -73,6 +80,24 @@ impl EdgeChecker for SegmentChecker {
                         return false;
                     }
                 }
+            }
+        }
+        if body.solids().is_empty() && body.self_pairs().is_empty() {
+            return true;
+        }
+        for t in [0.5, 1.0] {
+            let frames = if t < 1.0 {
+                for ((qi, a), b) in q.iter_mut().zip(from).zip(to) {
+                    *qi = a + t * (b - a);
+                }
+                chain.fk(q, fm);
+                &*fm
+            } else {
+                &*fb
+            };
+            body.place(chain, frames, pm);
+            if !solids_free(scene, body, frames, pm, near) || !self_free(body, frames, pm) {
+                return false;
             }
         }
         true

@@ -1,5 +1,15 @@
-//! The robot body as the collision checks see it: capsules around the link segments, or the
-//! paper's point colliders (Eq. 6–8).
+//! The robot body as the collision checks see it: one body model ([`RobotBody`]: capsules,
+//! fixed-length slider rods and solids, with the allowed-collision matrix for self-collision),
+//! or for the environment check of `discrete` and `segment` the paper's point colliders
+//! (Eq. 6–8).
+
+pub mod acm;
+pub mod bounds;
+pub mod model;
+
+pub use acm::{AllowedCollisions, DisabledPair, Reason, SelfCollisionConfig};
+pub use bounds::MotionBounds;
+pub use model::{Placed, RobotBody, Solid};
 
 use super::scene::CollisionScene;
 use crate::kinematics::{Chain, Frames};
@@ -65,29 +75,63 @@ pub fn link_points<'a>(
         .chain(segs.iter().map(|g| &g[1]))
 }
 
-/// True when every body segment's capsule is clear of every obstacle (distance `> ε`). The
-/// broad phase tests each link's enclosing ball against the obstacles' bounding spheres.
-pub fn capsules_free(
+/// True when every body of `body` is clear of every obstacle (distance `> ε`) and every checked
+/// self pair is apart (distance `> 0`), with the solids placed in `placed`. The broad phase tests
+/// each body's bounding ball against the obstacles' bounding spheres.
+pub fn bodies_free(
     scene: &CollisionScene,
-    chain: &Chain,
+    body: &RobotBody,
     frames: &Frames,
+    placed: &Placed,
     near: &mut Vec<u32>,
 ) -> bool {
-    let r = chain.radius();
     let eps = scene.clearance();
-    for link in 1..=chain.link_count() {
-        let segs = &frames.segments[chain.link_segments(link)];
-        if segs.is_empty() {
+    for b in 0..body.len() {
+        let (c, rad) = body.ball(frames, placed, b);
+        scene.near(&c, rad, eps, near);
+        for &k in near.iter() {
+            if body.obstacle_distance(scene, frames, placed, b, k as usize) <= eps {
+                return false;
+            }
+        }
+    }
+    self_free(body, frames, placed)
+}
+
+/// True when every solid of `body` (bodies after the capsule segments) is clear of every
+/// obstacle.
+pub fn solids_free(
+    scene: &CollisionScene,
+    body: &RobotBody,
+    frames: &Frames,
+    placed: &Placed,
+    near: &mut Vec<u32>,
+) -> bool {
+    let eps = scene.clearance();
+    for b in body.segments()..body.len() {
+        let (c, rad) = body.ball(frames, placed, b);
+        scene.near(&c, rad, eps, near);
+        for &k in near.iter() {
+            if body.obstacle_distance(scene, frames, placed, b, k as usize) <= eps {
+                return false;
+            }
+        }
+    }
+    true
+}
+
+/// True when every checked self pair of `body` is apart (distance `> 0`).
+pub fn self_free(body: &RobotBody, frames: &Frames, placed: &Placed) -> bool {
+    for &(p, q) in body.self_pairs() {
+        let (p, q) = (p as usize, q as usize);
+        let (cp, rp) = body.ball(frames, placed, p);
+        let (cq, rq) = body.ball(frames, placed, q);
+        let gap = rp + rq;
+        if (cp - cq).norm_squared() > gap * gap {
             continue;
         }
-        let (c, rad) = enclosing_ball(segs.iter().flatten());
-        scene.near(&c, rad + r, eps, near);
-        for &k in near.iter() {
-            for g in segs {
-                if scene.distance(k as usize, &g[0], &g[1], r) <= eps {
-                    return false;
-                }
-            }
+        if body.pair_distance(frames, placed, p, q) <= 0.0 {
+            return false;
         }
     }
     true
@@ -117,15 +161,4 @@ pub fn points_free(
         }
     }
     true
-}
-
-/// Smallest distance between any body capsule and any obstacle (`+∞` without obstacles or
-/// segments).
-pub fn capsules_min_distance(scene: &CollisionScene, chain: &Chain, frames: &Frames) -> f64 {
-    let r = chain.radius();
-    frames
-        .segments
-        .iter()
-        .map(|s| scene.min_distance(&s[0], &s[1], r, f64::INFINITY))
-        .fold(f64::INFINITY, f64::min)
 }

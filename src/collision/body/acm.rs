@@ -1,0 +1,315 @@
+//! The allowed-collision matrix: which pairs of robot bodies are never checked against each
+//! other, computed the way MoveIt's setup assistant fills an SRDF
+//! (`compute_default_collisions.cpp`), with one difference: pairs that merely never collided in
+//! random samples stay enabled (sampling proves nothing, and such pairs are cheap to bound).
+//!
+//! The unit is the URDF link that carries bodies (its *frame*, see
+//! [`super::model::RobotBody::frame`]). Two frames are
+//! - **Adjacent** when no other body-carrying frame lies between them along the chain (they
+//!   share a joint, possibly through links without geometry), or when no free axis lies between
+//!   them (they are rigidly connected);
+//! - **Default** when their bodies are in contact at the home pose;
+//! - **Always** when their bodies are in contact in at least [`ALWAYS_FRACTION`] of
+//!   [`SelfCollisionConfig::samples`] random configurations (drawn with
+//!   [`SelfCollisionConfig::seed`]);
+//! - **User** when the scenario lists their links in `allowed_collisions`.
+//!
+//! Every other pair of bodies on frames moved by different free axes is checked at nodes and
+//! along edges. Bodies on frames that never move relative to each other and are apart at home
+//! can never collide and are not checked. A capsule pair of links at least two apart whose
+//! *cores* (the segments themselves) meet at home is a real fold of the arm through itself,
+//! not a joint housing:
+//! [`AllowedCollisions::home_fold`] reports it, and the planner gives such a design `R = 0`.
+
+use super::model::{Placed, RobotBody};
+use crate::kinematics::Chain;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+/// Share of random configurations in contact above which a pair is "Always" in collision
+/// (MoveIt's default threshold).
+pub const ALWAYS_FRACTION: f64 = 0.95;
+
+/// Core distance (m) at or below which two capsule cores count as crossing.
+pub const FOLD_TOLERANCE: f64 = 1e-9;
+
+/// Self-collision settings (the `[robot]` keys `self_collision`, `allowed_collisions` and
+/// `self_collision_samples`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SelfCollisionConfig {
+    /// Check self-collision at all. Default true.
+    pub enabled: bool,
+    /// Pairs of chain links (from 1; 0 is the base) never checked against each other.
+    pub allowed: Vec<[usize; 2]>,
+    /// Random configurations sampled for the "Always" rule. Default 1000.
+    pub samples: usize,
+    /// Seed of those samples. Default 0.
+    pub seed: u64,
+}
+
+impl Default for SelfCollisionConfig {
+    fn default() -> Self {
+        SelfCollisionConfig {
+            enabled: true,
+            allowed: Vec::new(),
+            samples: 1000,
+            seed: 0,
+        }
+    }
+}
+
+impl SelfCollisionConfig {
+    /// Self-collision switched off.
+    pub fn off() -> Self {
+        SelfCollisionConfig {
+            enabled: false,
+            ..Self::default()
+        }
+    }
+}
+
+/// Why a pair of frames is never checked (the SRDF's `reason` attribute).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Reason {
+    /// The frames share a joint, or are rigidly connected.
+    Adjacent,
+    /// In contact at the home pose.
+    Default,
+    /// In contact in at least [`ALWAYS_FRACTION`] of the random samples.
+    Always,
+    /// Listed by the user (`allowed_collisions`, an SRDF, or self-collision off).
+    User,
+}
+
+impl Reason {
+    /// The SRDF spelling.
+    pub fn name(self) -> &'static str {
+        match self {
+            Reason::Adjacent => "Adjacent",
+            Reason::Default => "Default",
+            Reason::Always => "Always",
+            Reason::User => "User",
+        }
+    }
+}
+
+/// A pair of frames (URDF links) never checked against each other.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct DisabledPair {
+    /// First URDF link (the one nearer the base).
+    pub link1: String,
+    /// Second URDF link.
+    pub link2: String,
+    /// Why.
+    pub reason: Reason,
+}
+
+/// The allowed-collision matrix of a robot body and the body pairs left to check.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct AllowedCollisions {
+    disabled: Vec<DisabledPair>,
+    pairs: Vec<(u32, u32)>,
+    home_fold: Option<(usize, usize)>,
+}
+
+/// One body-carrying frame: its name, the free axes moving it, its bodies.
+struct Group {
+    name: String,
+    level: usize,
+    bodies: Vec<usize>,
+}
+
+impl AllowedCollisions {
+    /// The frame pairs never checked, with their reasons, in chain order.
+    pub fn disabled(&self) -> &[DisabledPair] {
+        &self.disabled
+    }
+
+    /// Body pairs `(p, q)` checked for self-collision, `level(p) ≤ level(q)`.
+    pub fn pairs(&self) -> &[(u32, u32)] {
+        &self.pairs
+    }
+
+    /// The chain links of a capsule pair whose cores cross at home (a fold of the arm through
+    /// itself), if any.
+    pub fn home_fold(&self) -> Option<(usize, usize)> {
+        self.home_fold
+    }
+
+    /// The matrix of `body` on `chain` (see the module documentation).
+    pub fn compute(chain: &Chain, body: &RobotBody, config: &SelfCollisionConfig) -> Self {
+        let mut groups: Vec<Group> = Vec::new();
+        for b in 0..body.len() {
+            match groups.iter_mut().find(|g| g.name == body.frame(b)) {
+                Some(g) => {
+                    g.level = g.level.min(body.level(b));
+                    g.bodies.push(b);
+                }
+                None => groups.push(Group {
+                    name: body.frame(b).to_string(),
+                    level: body.level(b),
+                    bodies: vec![b],
+                }),
+            }
+        }
+        // Chain order: by level, stable in body order.
+        groups.sort_by_key(|g| g.level);
+        let n = groups.len();
+        let mut reason: Vec<Option<Reason>> = vec![None; n * n];
+        let idx = |i: usize, j: usize| i.min(j) * n + i.max(j);
+        if !config.enabled {
+            for i in 0..n {
+                for j in i + 1..n {
+                    reason[idx(i, j)] = Some(Reason::User);
+                }
+            }
+        }
+        for i in 0..n {
+            for j in i + 1..n {
+                if reason[idx(i, j)].is_none() && (j == i + 1 || groups[i].level == groups[j].level)
+                {
+                    reason[idx(i, j)] = Some(Reason::Adjacent);
+                }
+            }
+        }
+        for &[a, b] in &config.allowed {
+            for i in 0..n {
+                for j in i + 1..n {
+                    let has = |g: &Group, l: usize| g.bodies.iter().any(|&x| body.link(x) == l);
+                    let hit = (has(&groups[i], a) && has(&groups[j], b))
+                        || (has(&groups[i], b) && has(&groups[j], a));
+                    if hit && reason[idx(i, j)].is_none() {
+                        reason[idx(i, j)] = Some(Reason::User);
+                    }
+                }
+            }
+        }
+        let mut frames = chain.frames();
+        let mut placed = Placed::default();
+        chain.fk(chain.home(), &mut frames);
+        body.place(chain, &frames, &mut placed);
+        let contact = |frames: &_, placed: &_, i: usize, j: usize| -> bool {
+            groups[i].bodies.iter().any(|&p| {
+                groups[j]
+                    .bodies
+                    .iter()
+                    .any(|&q| body.pair_distance(frames, placed, p, q) <= 0.0)
+            })
+        };
+        let mut home_fold = None;
+        for i in 0..n {
+            for j in i + 1..n {
+                if reason[idx(i, j)].is_some() {
+                    continue;
+                }
+                if contact(&frames, &placed, i, j) {
+                    reason[idx(i, j)] = Some(Reason::Default);
+                    if home_fold.is_none() {
+                        'fold: for &p in &groups[i].bodies {
+                            for &q in &groups[j].bodies {
+                                let apart = body.link(p).abs_diff(body.link(q)) >= 2;
+                                if apart
+                                    && body
+                                        .core_distance(&frames, p, q)
+                                        .is_some_and(|d| d <= FOLD_TOLERANCE)
+                                {
+                                    home_fold = Some((body.link(p), body.link(q)));
+                                    break 'fold;
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        // "Always": candidates are the pairs still enabled and moving relative to each other.
+        let mut candidates: Vec<(usize, usize, usize, usize)> = Vec::new(); // i, j, hits, misses
+        for i in 0..n {
+            for j in i + 1..n {
+                if reason[idx(i, j)].is_none() && groups[i].level != groups[j].level {
+                    candidates.push((i, j, 0, 0));
+                }
+            }
+        }
+        let samples = config.samples;
+        let max_misses = ((1.0 - ALWAYS_FRACTION) * samples as f64).floor() as usize;
+        if samples > 0 && chain.dof() > 0 && !candidates.is_empty() {
+            let mut rng = ChaCha8Rng::seed_from_u64(config.seed);
+            let mut q = vec![0.0; chain.dof()];
+            for _ in 0..samples {
+                if candidates.is_empty() {
+                    break;
+                }
+                chain.sample_config(&mut rng, &mut q);
+                chain.fk(&q, &mut frames);
+                body.place(chain, &frames, &mut placed);
+                for c in candidates.iter_mut() {
+                    if contact(&frames, &placed, c.0, c.1) {
+                        c.2 += 1;
+                    } else {
+                        c.3 += 1;
+                    }
+                }
+                candidates.retain(|c| c.3 <= max_misses);
+            }
+            for c in candidates {
+                if c.2 as f64 >= ALWAYS_FRACTION * samples as f64 {
+                    reason[idx(c.0, c.1)] = Some(Reason::Always);
+                }
+            }
+        }
+        let mut disabled = Vec::new();
+        let mut pairs = Vec::new();
+        for i in 0..n {
+            for j in i + 1..n {
+                match reason[idx(i, j)] {
+                    Some(r) => disabled.push(DisabledPair {
+                        link1: groups[i].name.clone(),
+                        link2: groups[j].name.clone(),
+                        reason: r,
+                    }),
+                    None if groups[i].level == groups[j].level => {}
+                    None => {
+                        for &p in &groups[i].bodies {
+                            for &q in &groups[j].bodies {
+                                let (p, q) = if body.level(p) <= body.level(q) {
+                                    (p, q)
+                                } else {
+                                    (q, p)
+                                };
+                                if body.level(p) != body.level(q) {
+                                    pairs.push((p as u32, q as u32));
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        pairs.sort_unstable();
+        AllowedCollisions {
+            disabled,
+            pairs,
+            home_fold,
+        }
+    }
+
+    /// Disables every pair of frames named in `extra` (for example from an SRDF), with its
+    /// reason, and drops the body pairs between them from the checked list.
+    pub fn disable(&mut self, body: &RobotBody, extra: &[DisabledPair]) {
+        for d in extra {
+            let known = self.disabled.iter().any(|e| {
+                (e.link1 == d.link1 && e.link2 == d.link2)
+                    || (e.link1 == d.link2 && e.link2 == d.link1)
+            });
+            if !known {
+                self.disabled.push(d.clone());
+            }
+            self.pairs.retain(|&(p, q)| {
+                let (a, b) = (body.frame(p as usize), body.frame(q as usize));
+                !((a == d.link1 && b == d.link2) || (a == d.link2 && b == d.link1))
+            });
+        }
+    }
+}

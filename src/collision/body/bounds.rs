@@ -1,0 +1,79 @@
+//! Configuration-independent motion bounds of the robot bodies (the basis of `certified`).
+//!
+//! Along a straight actuation-space motion, a point `p` of a body moves with velocity
+//! `Σ_j v_j(p)·Δa_j`, where `|v_j(p)| ≤ |p − o_j|` for a rotation axis `j` through `o_j` and
+//! `|v_j(p)| = 1` for a translation. [`Chain::arc_layout`] bounds `|p − o_j|` by arc lengths
+//! along the chain, in every configuration within the ranges; adding the body's own extent gives
+//! the factor `w_bj`, and no point of body `b` moves farther than `Σ_j w_bj·|Δa_j|`.
+//!
+//! Two bodies move relative to each other only through the joints between them: in the frame
+//! of the proximal body `p`, the distal body `q` moves at most `Σ_{level(p) ≤ j < level(q)}
+//! w_qj·|Δa_j|` ([`MotionBounds::relative`]).
+
+use super::model::RobotBody;
+use crate::kinematics::Chain;
+
+/// Per-body motion factors `w_bj` (see the module documentation).
+#[derive(Clone, Debug, Default)]
+pub struct MotionBounds {
+    bodies: usize,
+    dof: usize,
+    w: Vec<f64>,
+}
+
+impl MotionBounds {
+    /// The bounds of `body` on `chain`.
+    pub fn new(chain: &Chain, body: &RobotBody) -> Self {
+        let layout = chain.layout();
+        let dof = chain.dof();
+        let n = body.len();
+        let mut w = vec![0.0; n * dof];
+        let ns = body.segments();
+        for b in 0..n {
+            // Farthest arc position of the body, and its extent beyond that position.
+            let (end, extent) = if b < ns {
+                (layout.segment_end[b], body.radius(b))
+            } else {
+                let s = &body.solids()[b - ns];
+                let origin = if s.level == 0 {
+                    0.0
+                } else {
+                    layout.axis[s.level - 1]
+                };
+                (origin, s.reach_from_origin())
+            };
+            for (j, axis) in chain.free_axes().iter().enumerate().take(body.level(b)) {
+                w[b * dof + j] = if axis.axis.is_rotation() {
+                    (end - layout.joint[axis.link - 1]).max(0.0) + extent
+                } else {
+                    1.0
+                };
+            }
+        }
+        MotionBounds { bodies: n, dof, w }
+    }
+
+    /// Bound on how far any point of body `b` moves for the step `delta`.
+    #[inline]
+    pub fn displacement(&self, b: usize, delta: &[f64]) -> f64 {
+        let row = &self.w[b * self.dof..(b + 1) * self.dof];
+        row.iter().zip(delta).map(|(w, d)| w * d.abs()).sum()
+    }
+
+    /// Bound on how far body `q` moves relative to a body moved by the first `from_level`
+    /// free axes only, for the step `delta`.
+    #[inline]
+    pub fn relative(&self, q: usize, from_level: usize, delta: &[f64]) -> f64 {
+        let row = &self.w[q * self.dof..(q + 1) * self.dof];
+        row[from_level.min(self.dof)..]
+            .iter()
+            .zip(&delta[from_level.min(self.dof)..])
+            .map(|(w, d)| w * d.abs())
+            .sum()
+    }
+
+    /// Number of bodies covered.
+    pub fn bodies(&self) -> usize {
+        self.bodies
+    }
+}

@@ -1,0 +1,356 @@
+//! The one robot body model: every rigid collision body of a chain, as the node checks, the four
+//! edge checkers, the oracle, the motion bounds of `certified` and the URDF/SRDF export see it.
+//!
+//! A body is either
+//! - a **capsule segment** of the chain ([`crate::kinematics::Frames::segments`]): the DH body
+//!   polyline of a link, a constant translation piece, or the fixed-length rod of a prismatic
+//!   axis ([`Chain::slider_rod`]), with its own radius; or
+//! - a **solid**: a convex polyhedron (a URDF mesh's convex hull), a box, a cylinder or a
+//!   sphere, rigidly attached to the frame right after some free axis (or to the base).
+//!
+//! Bodies are numbered segments first (in [`crate::kinematics::Frames::segments`] order), then
+//! solids. Each one knows the free axes that move it (a prefix of the actuation vector, its
+//! *level*), the chain link that owns it, and the URDF link that carries it (its *frame*), which
+//! is what the allowed-collision matrix and the SRDF speak of.
+
+use super::super::scene::CollisionScene;
+use super::acm::{AllowedCollisions, SelfCollisionConfig};
+use crate::kinematics::{Chain, Frames};
+use crate::world::convert::{from_parry_point, to_parry_point, to_parry_pose};
+use nalgebra::{IsometryMatrix3, Point3};
+use parry3d_f64::math::Pose;
+use parry3d_f64::query;
+use parry3d_f64::shape::{Capsule, SharedShape};
+
+/// A rigid body other than a capsule segment, attached to a frame of the chain.
+#[derive(Clone)]
+pub struct Solid {
+    /// Moved by the first `level` free axes: it rides on the frame right after free axis
+    /// `level − 1` ([`Frames::axis_frames`]), or on the base `F_0` when `level` is 0.
+    pub level: usize,
+    /// Its pose in that carrier frame.
+    pub local: IsometryMatrix3<f64>,
+    /// The shape (parry): convex polyhedron, cuboid, cylinder or ball.
+    pub shape: SharedShape,
+    /// Chain link (from 1; 0 for the base) that owns it, for messages.
+    pub link: usize,
+    /// Name of the URDF link that carries it.
+    pub frame: String,
+    /// Centre of its bounding sphere, in the carrier frame.
+    pub center: Point3<f64>,
+    /// Radius of its bounding sphere.
+    pub radius: f64,
+}
+
+impl std::fmt::Debug for Solid {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Solid")
+            .field("level", &self.level)
+            .field("link", &self.link)
+            .field("frame", &self.frame)
+            .field("shape", &self.shape.shape_type())
+            .field("radius", &self.radius)
+            .finish()
+    }
+}
+
+impl Solid {
+    /// A solid of `shape` at `local` in the carrier frame of `level`, owned by chain link
+    /// `link` and carried by the URDF link `frame`.
+    pub fn new(
+        level: usize,
+        local: IsometryMatrix3<f64>,
+        shape: SharedShape,
+        link: usize,
+        frame: String,
+    ) -> Self {
+        let bs = shape.compute_bounding_sphere(&to_parry_pose(&local));
+        Solid {
+            level,
+            local,
+            shape,
+            link,
+            frame,
+            center: from_parry_point(bs.center()),
+            radius: bs.radius(),
+        }
+    }
+
+    /// Largest distance from the carrier frame's origin to a point of the solid.
+    pub fn reach_from_origin(&self) -> f64 {
+        self.center.coords.norm() + self.radius
+    }
+}
+
+/// The robot body of a chain: capsule radii, solids, and the self-collision pairs to check.
+#[derive(Clone, Debug)]
+pub struct RobotBody {
+    radii: Vec<f64>,
+    solids: Vec<Solid>,
+    levels: Vec<usize>,
+    links: Vec<usize>,
+    frames: Vec<String>,
+    acm: AllowedCollisions,
+}
+
+/// World placement of the solids at one configuration (reused buffer).
+#[derive(Clone, Debug, Default)]
+pub struct Placed {
+    /// World pose of each solid.
+    pub poses: Vec<Pose>,
+    /// World centre of each solid's bounding sphere.
+    pub centers: Vec<Point3<f64>>,
+}
+
+impl RobotBody {
+    /// The body of `chain`: a capsule of the chain's radius around every segment, then
+    /// `solids`, with the allowed-collision matrix computed by `self_collision`.
+    pub fn new(chain: &Chain, solids: Vec<Solid>, self_collision: &SelfCollisionConfig) -> Self {
+        let radii = vec![chain.radius(); chain.segment_count()];
+        Self::with_radii(chain, radii, solids, self_collision)
+    }
+
+    /// As [`RobotBody::new`] with one radius per segment.
+    pub fn with_radii(
+        chain: &Chain,
+        radii: Vec<f64>,
+        solids: Vec<Solid>,
+        self_collision: &SelfCollisionConfig,
+    ) -> Self {
+        let mut levels = Vec::new();
+        let mut links = Vec::new();
+        let mut frames = Vec::new();
+        for s in 0..chain.segment_count() {
+            let i = chain.segment_info(s);
+            levels.push(i.level);
+            links.push(i.link);
+            frames.push(i.frame.clone());
+        }
+        for s in &solids {
+            levels.push(s.level);
+            links.push(s.link);
+            frames.push(s.frame.clone());
+        }
+        let mut body = RobotBody {
+            radii,
+            solids,
+            levels,
+            links,
+            frames,
+            acm: AllowedCollisions::default(),
+        };
+        body.acm = AllowedCollisions::compute(chain, &body, self_collision);
+        body
+    }
+
+    /// The capsule body of `chain` with the default self-collision settings.
+    pub fn of_chain(chain: &Chain) -> Self {
+        Self::new(chain, Vec::new(), &SelfCollisionConfig::default())
+    }
+
+    /// Number of bodies (segments, then solids).
+    pub fn len(&self) -> usize {
+        self.levels.len()
+    }
+
+    /// True when the robot has no body at all.
+    pub fn is_empty(&self) -> bool {
+        self.levels.is_empty()
+    }
+
+    /// Number of capsule segments (bodies `0 … segments − 1`).
+    pub fn segments(&self) -> usize {
+        self.radii.len()
+    }
+
+    /// The solids (bodies `segments() …`).
+    pub fn solids(&self) -> &[Solid] {
+        &self.solids
+    }
+
+    /// Radius of capsule segment `s`.
+    pub fn radius(&self, s: usize) -> f64 {
+        self.radii[s]
+    }
+
+    /// Free axes moving body `b`: the first `level(b)` of the actuation vector.
+    pub fn level(&self, b: usize) -> usize {
+        self.levels[b]
+    }
+
+    /// Chain link (from 1; 0 for the base) owning body `b`.
+    pub fn link(&self, b: usize) -> usize {
+        self.links[b]
+    }
+
+    /// URDF link carrying body `b`.
+    pub fn frame(&self, b: usize) -> &str {
+        &self.frames[b]
+    }
+
+    /// The allowed-collision matrix and the self pairs checked.
+    pub fn acm(&self) -> &AllowedCollisions {
+        &self.acm
+    }
+
+    /// The self-collision pairs checked, as body indices `(p, q)` with `level(p) ≤ level(q)`.
+    pub fn self_pairs(&self) -> &[(u32, u32)] {
+        self.acm.pairs()
+    }
+
+    /// Places the solids at the configuration whose frames are in `frames`.
+    pub fn place(&self, chain: &Chain, frames: &Frames, out: &mut Placed) {
+        out.poses.clear();
+        out.centers.clear();
+        for s in &self.solids {
+            let carrier = if s.level == 0 {
+                &frames.frames[0]
+            } else {
+                &frames.axis_frames[s.level - 1]
+            };
+            let world = carrier * s.local;
+            out.poses.push(to_parry_pose(&world));
+            out.centers.push(carrier * s.center);
+        }
+        let _ = chain;
+    }
+
+    /// Bounding ball of body `b` (centre, radius).
+    #[inline]
+    pub fn ball(&self, frames: &Frames, placed: &Placed, b: usize) -> (Point3<f64>, f64) {
+        let ns = self.radii.len();
+        if b < ns {
+            let [p, q] = frames.segments[b];
+            (
+                nalgebra::center(&p, &q),
+                0.5 * (q - p).norm() + self.radii[b],
+            )
+        } else {
+            (placed.centers[b - ns], self.solids[b - ns].radius)
+        }
+    }
+
+    /// Distance between body `b` and obstacle `k` (signed for closed forms, 0 when touching
+    /// for parry's shapes; `≤ ε` is a collision).
+    #[inline]
+    pub fn obstacle_distance(
+        &self,
+        scene: &CollisionScene,
+        frames: &Frames,
+        placed: &Placed,
+        b: usize,
+        k: usize,
+    ) -> f64 {
+        let ns = self.radii.len();
+        if b < ns {
+            let [p, q] = &frames.segments[b];
+            scene.distance(k, p, q, self.radii[b])
+        } else {
+            let m = b - ns;
+            scene.shape_distance(k, &placed.poses[m], self.solids[m].shape.as_ref())
+        }
+    }
+
+    /// A lower bound of the distance between body `b` and obstacle `k` from their bounding
+    /// spheres.
+    #[inline]
+    pub fn obstacle_lower_bound(
+        &self,
+        scene: &CollisionScene,
+        frames: &Frames,
+        placed: &Placed,
+        b: usize,
+        k: usize,
+    ) -> f64 {
+        let ns = self.radii.len();
+        if b < ns {
+            let [p, q] = &frames.segments[b];
+            scene.lower_bound(k, p, q, self.radii[b])
+        } else {
+            let c = placed.centers[b - ns];
+            scene.lower_bound(k, &c, &c, self.solids[b - ns].radius)
+        }
+    }
+
+    /// Distance between bodies `p` and `q` (signed for two capsules; 0 when touching
+    /// otherwise; `≤ 0` is a self-collision).
+    #[inline]
+    pub fn pair_distance(&self, frames: &Frames, placed: &Placed, p: usize, q: usize) -> f64 {
+        let ns = self.radii.len();
+        match (p < ns, q < ns) {
+            (true, true) => {
+                let [a, b] = &frames.segments[p];
+                let [c, d] = &frames.segments[q];
+                super::super::distance::segment_segment(a, b, c, d) - self.radii[p] - self.radii[q]
+            }
+            (true, false) | (false, true) => {
+                let (s, m) = if p < ns { (p, q - ns) } else { (q, p - ns) };
+                let [a, b] = &frames.segments[s];
+                let cap = Capsule::new(to_parry_point(a), to_parry_point(b), self.radii[s]);
+                query::distance(
+                    &Pose::IDENTITY,
+                    &cap,
+                    &placed.poses[m],
+                    self.solids[m].shape.as_ref(),
+                )
+                .map_or(0.0, |d| d.distance)
+            }
+            (false, false) => {
+                let (m, n) = (p - ns, q - ns);
+                query::distance(
+                    &placed.poses[m],
+                    self.solids[m].shape.as_ref(),
+                    &placed.poses[n],
+                    self.solids[n].shape.as_ref(),
+                )
+                .map_or(0.0, |d| d.distance)
+            }
+        }
+    }
+
+    /// Distance between the *cores* of two capsule segments (their segments, without radii);
+    /// `None` when either body is a solid.
+    pub fn core_distance(&self, frames: &Frames, p: usize, q: usize) -> Option<f64> {
+        let ns = self.radii.len();
+        (p < ns && q < ns).then(|| {
+            let [a, b] = &frames.segments[p];
+            let [c, d] = &frames.segments[q];
+            super::super::distance::segment_segment(a, b, c, d)
+        })
+    }
+
+    /// Smallest distance between any body and any obstacle (`+∞` without either).
+    pub fn min_obstacle_distance(
+        &self,
+        scene: &CollisionScene,
+        frames: &Frames,
+        placed: &Placed,
+    ) -> f64 {
+        let mut best = f64::INFINITY;
+        for b in 0..self.len() {
+            for k in 0..scene.len() {
+                if self.obstacle_lower_bound(scene, frames, placed, b, k) >= best {
+                    continue;
+                }
+                best = best.min(self.obstacle_distance(scene, frames, placed, b, k));
+            }
+        }
+        best
+    }
+
+    /// Smallest distance over the checked self pairs (`+∞` without pairs).
+    pub fn min_self_distance(&self, frames: &Frames, placed: &Placed) -> f64 {
+        self.self_pairs()
+            .iter()
+            .map(|&(p, q)| self.pair_distance(frames, placed, p as usize, q as usize))
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// The first checked self pair in contact at this configuration, if any.
+    pub fn self_contact(&self, frames: &Frames, placed: &Placed) -> Option<(usize, usize, f64)> {
+        self.self_pairs().iter().find_map(|&(p, q)| {
+            let d = self.pair_distance(frames, placed, p as usize, q as usize);
+            (d <= 0.0).then_some((p as usize, q as usize, d))
+        })
+    }
+}
