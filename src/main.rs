@@ -123,13 +123,20 @@ enum Command {
         #[command(flatten)]
         urdf: UrdfReach,
     },
-    /// Export a design (design JSON or best.json) as a URDF robot.
+    /// Export a design (design JSON or best.json) as a URDF robot, and its SRDF (planning group
+    /// and allowed-collision matrix) beside it: writes OUTPUT and OUTPUT with the extension
+    /// .srdf.
     Urdf {
         /// The design JSON, or an optimiser's best.json.
         design: PathBuf,
         /// Output URDF file (written atomically); the robot is named after its stem.
         #[arg(short, long)]
         output: PathBuf,
+        /// Scenario whose [robot] self-collision settings (self_collision, allowed_collisions,
+        /// self_collision_samples, seed) fill the SRDF. Default: self-collision on, 1000
+        /// samples, seed 0.
+        #[arg(long)]
+        scenario: Option<PathBuf>,
     },
     /// Compare the four edge checkers with the dense-sampling oracle on random edges.
     Edges {
@@ -475,14 +482,25 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
                 );
             }
         }
-        Command::Urdf { design, output } => {
+        Command::Urdf {
+            design,
+            output,
+            scenario,
+        } => {
             let d = kinsynth::Design::load(&design)?;
+            let config = match &scenario {
+                Some(p) => Scenario::load(p)?.planner.self_collision,
+                None => kinsynth::collision::SelfCollisionConfig::default(),
+            };
+            let srdf = output.with_extension("srdf");
             kinsynth::export::write_urdf(&d, &output)?;
+            kinsynth::export::write_srdf(&d, &config, &srdf)?;
             say!(
-                "wrote {} ({} links, {} joints)",
+                "wrote {} ({} links, {} joints) and {}",
                 output.display(),
                 d.links.len(),
-                d.joints_kept()
+                d.joints_kept(),
+                srdf.display()
             );
         }
         Command::Edges {

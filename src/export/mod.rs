@@ -1,8 +1,11 @@
-//! Results for the rest of the tool chain: plots of a run, designs as URDF robots, and
+//! Results for the rest of the tool chain: plots of a run, designs as URDF robots with their
+//! SRDF (allowed-collision matrix), and
 //! reachability paths as joint trajectories keyed by URDF joint names.
 
 pub mod plot;
+pub mod srdf;
 pub mod trajectory;
 pub mod urdf;
 
+pub use srdf::{design_to_srdf, write_srdf};
 pub use urdf::{design_to_urdf, write_urdf};

@@ -158,6 +158,8 @@ pub mod files {
     pub const CHECKPOINT: &str = "checkpoint.json";
     /// The best design as a URDF robot.
     pub const URDF: &str = "robot.urdf";
+    /// Its SRDF: planning group and allowed-collision matrix.
+    pub const SRDF: &str = "robot.srdf";
     /// Folder of the joint trajectories of the best design, one pair of files per reached task.
     pub const TRAJECTORIES: &str = "trajectories";
 }
@@ -405,6 +407,11 @@ impl<'a> Runner<'a> {
         write_atomic(&self.out.join(files::BEST), best.as_bytes())?;
         write_atomic(&self.out.join(files::REACH), report.to_json().as_bytes())?;
         crate::export::write_urdf(&summary.design, &self.out.join(files::URDF))?;
+        crate::export::write_srdf(
+            &summary.design,
+            &self.scenario.planner.self_collision,
+            &self.out.join(files::SRDF),
+        )?;
         crate::export::trajectory::write_trajectories(report, &self.out.join(files::TRAJECTORIES))?;
         let mut csv = String::from("elapsed_s,evaluations,best_cost,best_reachability\n");
         for r in history {

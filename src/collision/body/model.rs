@@ -198,7 +198,7 @@ impl RobotBody {
         self.acm.pairs()
     }
 
-    /// Places the solids at the configuration whose frames are in `frames`.
+    /// Places the solids at the configuration whose frames are in `frames` (of `chain`).
     pub fn place(&self, chain: &Chain, frames: &Frames, out: &mut Placed) {
         out.poses.clear();
         out.centers.clear();
@@ -338,12 +338,21 @@ impl RobotBody {
         best
     }
 
-    /// Smallest distance over the checked self pairs (`+∞` without pairs).
+    /// Smallest distance over the checked self pairs (`+∞` without pairs). Pairs whose
+    /// bounding balls are farther apart than the best distance so far are skipped, so the
+    /// result is exact.
     pub fn min_self_distance(&self, frames: &Frames, placed: &Placed) -> f64 {
-        self.self_pairs()
-            .iter()
-            .map(|&(p, q)| self.pair_distance(frames, placed, p as usize, q as usize))
-            .fold(f64::INFINITY, f64::min)
+        let mut best = f64::INFINITY;
+        for &(p, q) in self.self_pairs() {
+            let (p, q) = (p as usize, q as usize);
+            let (cp, rp) = self.ball(frames, placed, p);
+            let (cq, rq) = self.ball(frames, placed, q);
+            if (cp - cq).norm() - rp - rq >= best {
+                continue;
+            }
+            best = best.min(self.pair_distance(frames, placed, p, q));
+        }
+        best
     }
 
     /// The first checked self pair in contact at this configuration, if any.
