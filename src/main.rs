@@ -309,7 +309,7 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
             quiet,
         } => {
             use kinsynth::optimize::lock::OutputLock;
-            use kinsynth::optimize::runner::{check_seconds, RunOptions, Runner};
+            use kinsynth::optimize::runner::{check_seconds, Checkpoint, RunOptions, Runner};
             if let Some(t) = time_limit {
                 check_seconds("--time-limit", t)?;
             }
@@ -337,11 +337,7 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
                 }
             }
             let out = match (&resume, out) {
-                (Some(dir), _) => {
-                    // A directory without a checkpoint is an error before anything is written.
-                    Runner::read_checkpoint(dir)?;
-                    dir.clone()
-                }
+                (Some(dir), _) => dir.clone(),
                 (None, Some(out)) => out,
                 (None, None) => {
                     return Err(kinsynth::Error::invalid(
@@ -351,29 +347,13 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
                     ))
                 }
             };
-            let (lock, acquired) = OutputLock::acquire(&out)?;
-            if let Some(o) = &acquired.took_over {
-                eprintln!(
-                    "warning: {}: taking over the lock of pid {} on host {} ({}), which is no longer running",
-                    lock.path().display(),
-                    o.pid,
-                    o.host,
-                    o.command
-                );
-            }
-            if !acquired.removed.is_empty() {
-                eprintln!(
-                    "warning: {}: removed {} temporary file(s) left by a killed run",
-                    out.display(),
-                    acquired.removed.len()
-                );
-            }
-            let _ = LOCK_PATH.set(lock.path().to_path_buf());
-            // Read under the lock: the state the last run left.
             let checkpoint = match &resume {
                 Some(dir) => Some(Runner::read_checkpoint(dir)?),
                 None => None,
             };
+            if let Some(l) = lmax {
+                override_planner(&mut Default::default(), None, Some(l))?;
+            }
             let scenario_path = match (&checkpoint, file) {
                 (_, Some(f)) => f,
                 (Some(c), None) => c.scenario.clone(),
@@ -386,7 +366,7 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
                 }
             };
             let s = Scenario::load(&scenario_path)?;
-            let (planner, options) = match &checkpoint {
+            let settings = |checkpoint: &Option<Checkpoint>| match checkpoint {
                 Some(c) => {
                     let mut options = c.options.clone();
                     // A budget given again replaces the checkpoint's: the run goes on to it.
@@ -402,7 +382,7 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
                     if let Some(k) = recheck_seeds {
                         options.recheck_seeds = k;
                     }
-                    (c.planner.clone(), options)
+                    Ok((c.planner.clone(), options))
                 }
                 None => {
                     let mut planner = s.planner.clone();
@@ -428,9 +408,10 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
                         recheck_seeds: recheck_seeds.unwrap_or(s.optimizer.recheck_seeds),
                         confirm_seeds: confirm_seeds.unwrap_or(s.optimizer.confirm_seeds),
                     };
-                    (planner, options)
+                    Ok((planner, options))
                 }
             };
+            let (_, options) = settings(&checkpoint)?;
             if options.time_limit.is_none() && options.evaluations.is_none() {
                 return Err(kinsynth::Error::invalid(
                     "budget",
@@ -438,6 +419,30 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
                     "give --time-limit or --evaluations (or set them in [optimizer])",
                 ));
             }
+            let (lock, acquired) = OutputLock::acquire(&out)?;
+            if let Some(o) = &acquired.took_over {
+                eprintln!(
+                    "warning: {}: taking over the lock of pid {} on host {} ({}), which is no longer running",
+                    lock.path().display(),
+                    o.pid,
+                    o.host,
+                    o.command
+                );
+            }
+            if !acquired.removed.is_empty() {
+                eprintln!(
+                    "warning: {}: removed {} temporary file(s) left by a killed run",
+                    out.display(),
+                    acquired.removed.len()
+                );
+            }
+            let _ = LOCK_PATH.set(lock.path().to_path_buf());
+            // Read again under the lock: the state the last run left.
+            let checkpoint = match &resume {
+                Some(dir) => Some(Runner::read_checkpoint(dir)?),
+                None => None,
+            };
+            let (planner, options) = settings(&checkpoint)?;
             let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
             {
                 let stop = stop.clone();
