@@ -85,18 +85,18 @@ enum Command {
         /// Budget in objective evaluations, over the whole run (with --resume: a new total).
         /// Default: the scenario's.
         #[arg(long)]
-        evaluations: Option<u64>,
+        evaluations: Option<f64>,
         /// Seconds between checkpoints. Default: the scenario's.
         #[arg(long)]
         checkpoint_interval: Option<f64>,
         /// Fresh planner seeds the final candidates are re-checked with (0: none). Default:
         /// the scenario's optimizer.recheck_seeds.
         #[arg(long)]
-        recheck_seeds: Option<usize>,
+        recheck_seeds: Option<f64>,
         /// Extra planner runs that confirm every R = 1 an evaluation claims. Default: the
         /// scenario's optimizer.confirm_seeds.
         #[arg(long, conflicts_with = "resume")]
-        confirm_seeds: Option<usize>,
+        confirm_seeds: Option<f64>,
         /// Output directory.
         #[arg(long, required_unless_present = "resume", conflicts_with = "resume")]
         out: Option<PathBuf>,
@@ -156,7 +156,7 @@ enum Command {
         /// Plan with N planner seeds (--seed and the N − 1 after it) and report the spread of
         /// R: min, mean and max. The report and trajectories are those of the first seed.
         #[arg(long)]
-        seeds: Option<usize>,
+        seeds: Option<f64>,
         /// Write the report as JSON to this file (atomically).
         #[arg(long)]
         json: Option<PathBuf>,
@@ -217,6 +217,23 @@ fn override_planner(
         planner.schedule = None;
     }
     Ok(())
+}
+
+/// The largest evaluation budget `--evaluations` accepts.
+const MAX_EVALUATIONS: u64 = 1_000_000_000_000;
+
+/// A whole number given as `flag`: refused, naming the flag and the value, unless it is an
+/// integer in `min..=max`.
+fn whole(flag: &str, v: Option<f64>, min: u64, max: u64) -> Result<Option<u64>, kinsynth::Error> {
+    match v {
+        None => Ok(None),
+        Some(x) if x.fract() == 0.0 && x >= min as f64 && x <= max as f64 => Ok(Some(x as u64)),
+        Some(x) => Err(kinsynth::Error::invalid(
+            flag,
+            x,
+            format!("must be a whole number from {min} to {max}"),
+        )),
+    }
 }
 
 /// `reach` options for evaluating an existing URDF robot and writing trajectories.
@@ -316,26 +333,12 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
             if let Some(t) = checkpoint_interval {
                 check_seconds("--checkpoint-interval", t)?;
             }
-            if evaluations == Some(0) {
-                return Err(kinsynth::Error::invalid(
-                    "--evaluations",
-                    0,
-                    "must be at least 1",
-                ));
-            }
-            for (flag, n) in [
-                ("--recheck-seeds", recheck_seeds),
-                ("--confirm-seeds", confirm_seeds),
-            ] {
-                let max = kinsynth::optimize::runner::MAX_SEEDS;
-                if let Some(n) = n.filter(|&n| n > max) {
-                    return Err(kinsynth::Error::invalid(
-                        flag,
-                        n,
-                        format!("must be at most {max}"),
-                    ));
-                }
-            }
+            let max_seeds = kinsynth::optimize::runner::MAX_SEEDS as u64;
+            let evaluations = whole("--evaluations", evaluations, 1, MAX_EVALUATIONS)?;
+            let recheck_seeds =
+                whole("--recheck-seeds", recheck_seeds, 0, max_seeds)?.map(|n| n as usize);
+            let confirm_seeds =
+                whole("--confirm-seeds", confirm_seeds, 0, max_seeds)?.map(|n| n as usize);
             let out = match (&resume, out) {
                 (Some(dir), _) => dir.clone(),
                 (None, Some(out)) => out,
@@ -549,14 +552,8 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
         } => {
             use rayon::prelude::*;
             let s = Scenario::load(&file)?;
-            let max = kinsynth::optimize::runner::MAX_SEEDS;
-            if let Some(n) = seeds.filter(|&n| n == 0 || n > max) {
-                return Err(kinsynth::Error::invalid(
-                    "--seeds",
-                    n,
-                    format!("must lie in 1..={max}"),
-                ));
-            }
+            let max_seeds = kinsynth::optimize::runner::MAX_SEEDS as u64;
+            let seeds = whole("--seeds", seeds, 1, max_seeds)?;
             // A best.json without --seed or --seeds replays the evaluation that produced it.
             let replay = match (&design, seed, seeds) {
                 (Some(p), None, None) => kinsynth::optimize::runner::Replay::from_best(p)?,
@@ -596,7 +593,7 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
                 }
                 None => (seed.unwrap_or(s.seed), 0),
             };
-            let n = seeds.unwrap_or(1) as u64;
+            let n = seeds.unwrap_or(1);
             let scene = std::sync::Arc::new(kinsynth::collision::CollisionScene::new(&s.workspace));
             let start = std::time::Instant::now();
             let mut reports: Vec<kinsynth::planning::ReachReport> = (0..n)

@@ -284,7 +284,20 @@ fn bad_budgets_are_refused_naming_the_flag_and_the_value() {
         ),
         ("--lmax", "-1", "must be positive and finite"),
         ("--lmax", "inf", "must be positive and finite"),
-        ("--recheck-seeds", "100000", "must be at most 1000"),
+        (
+            "--recheck-seeds",
+            "100000",
+            "must be a whole number from 0 to 1000",
+        ),
+        (
+            "--recheck-seeds",
+            "-1",
+            "must be a whole number from 0 to 1000",
+        ),
+        ("--evaluations", "-1", "must be a whole number from 1 to"),
+        ("--evaluations", "0", "must be a whole number from 1 to"),
+        ("--evaluations", "2.5", "must be a whole number from 1 to"),
+        ("--evaluations", "nan", "must be a whole number from 1 to"),
     ] {
         let o = optimize(&paper_2d(), &out, &[flag, value])
             .output()
