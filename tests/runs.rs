@@ -197,6 +197,21 @@ fn a_checkpoint_state_of_the_wrong_length_is_an_error_not_a_panic() {
         "{e}"
     );
     assert!(!e.contains("panicked"), "{e}");
+    // Planner settings out of their domain are refused too.
+    ok(&optimize(
+        &paper_2d(),
+        &out,
+        &["--evaluations", "32", "--recheck-seeds", "1"],
+    )
+    .output()
+    .unwrap());
+    let mut c = json(&path);
+    c["planner"]["l_max"] = serde_json::json!(-1.0);
+    std::fs::write(&path, serde_json::to_string(&c).unwrap()).unwrap();
+    one_line_error(
+        &resume(&out, &[]),
+        &["checkpoint.json", "planner.l_max = -1"],
+    );
 }
 
 #[test]

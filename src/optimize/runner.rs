@@ -76,6 +76,45 @@ impl RunOptions {
     }
 }
 
+/// Checks planner settings read from a checkpoint or a `best.json` as a scenario's are checked;
+/// errors name the field (`planner.l_max`, …).
+pub fn check_planner(p: &crate::planning::PlannerConfig) -> Result<()> {
+    let positive = |field: &str, v: f64| {
+        if v.is_finite() && v > 0.0 {
+            Ok(())
+        } else {
+            Err(Error::invalid(field, v, "must be positive and finite"))
+        }
+    };
+    positive("planner.l_max", p.l_max)?;
+    positive("planner.goal_tolerance", p.goal_tolerance)?;
+    if let Some(t) = p.time_limit {
+        positive("planner.time_limit", t)?;
+    }
+    if !(p.lambda.is_finite() && p.lambda >= 0.0) {
+        return Err(Error::invalid(
+            "planner.lambda",
+            p.lambda,
+            "must be finite and not negative",
+        ));
+    }
+    if !(0.0..=1.0).contains(&p.goal_bias) {
+        return Err(Error::invalid(
+            "planner.goal_bias",
+            p.goal_bias,
+            "must lie in [0, 1]",
+        ));
+    }
+    if p.max_iterations == 0 {
+        return Err(Error::invalid(
+            "planner.max_iterations",
+            0,
+            "must be at least 1",
+        ));
+    }
+    Ok(())
+}
+
 /// A number of seconds given as `field` must be finite and not negative.
 pub fn check_seconds(field: &str, value: f64) -> Result<()> {
     if value.is_finite() && value >= 0.0 {
@@ -292,14 +331,7 @@ impl Replay {
         };
         let planner: crate::planning::PlannerConfig =
             serde_json::from_value(planner.clone()).map_err(|e| parse("planner", e))?;
-        if !(planner.l_max.is_finite() && planner.l_max > 0.0) {
-            return Err(Error::invalid(
-                "planner.l_max",
-                planner.l_max,
-                "must be positive and finite",
-            )
-            .in_file(path));
-        }
+        check_planner(&planner).map_err(|e| e.in_file(path))?;
         Ok(Some(Replay {
             seed: serde_json::from_value(seed.clone()).map_err(|e| parse("seed", e))?,
             stream: serde_json::from_value(stream.clone()).map_err(|e| parse("stream", e))?,
@@ -523,6 +555,7 @@ impl<'a> Runner<'a> {
         if let Some(c) = &resume {
             self.check_binding(c, &scenario_hash, &shape)
                 .map_err(|e| e.in_file(&checkpoint_path))?;
+            check_planner(&self.planner).map_err(|e| e.in_file(&checkpoint_path))?;
         }
         self.options
             .validate()
