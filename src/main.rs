@@ -6,6 +6,10 @@ use kinsynth::Scenario;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+/// The output-directory lock file of a running `optimize`, removed by the Ctrl-C handler when
+/// a second Ctrl-C ends the process at once.
+static LOCK_PATH: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();
+
 /// `println!` that ends the process quietly when stdout is closed (e.g. piped into `head`).
 macro_rules! say {
     ($($t:tt)*) => {{
@@ -27,6 +31,8 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Write a random scenario like the paper's experiments (paper-2d, paper-3d).
+    ///
+    /// Writes the file given by -o.
     Scenario {
         /// Which preset: paper-2d (§IV-A) or paper-3d (§IV-B).
         #[arg(long)]
@@ -39,41 +45,61 @@ enum Command {
         output: PathBuf,
     },
     /// Validate a scenario file and print a short summary.
+    ///
+    /// Writes no files.
     Check {
         /// The scenario file (TOML).
         file: PathBuf,
     },
-    /// Optimise a design for a scenario (the main job): GA, PSO or ASA over the design space,
-    /// writing best.json, history.csv, reach.json and convergence.svg into --out.
+    /// Optimise a design for a scenario (the main job): GA, PSO or ASA over the design space.
+    ///
+    /// Writes into --out (or the --resume directory): best.json (the best design and its
+    /// figures), history.csv (one row per generation), reach.json (the best design's
+    /// reachability report), convergence.svg (best R and cost against time), robot.urdf (the
+    /// best design as URDF), robot.srdf (its planning group and allowed-collision matrix),
+    /// trajectories/ (task_{i}.csv and task_{i}.json per reached task)
+    /// and checkpoint.json (the state for --resume); .kinsynth.lock exists while the run lasts.
+    #[command(allow_negative_numbers = true)]
     Optimize {
-        /// The scenario file (TOML). Not needed with --resume.
+        /// The scenario file (TOML). With --resume: default the checkpoint's, and if given it
+        /// must be the scenario the run started with.
         file: Option<PathBuf>,
         /// Optimiser. Default: the scenario's.
-        #[arg(long)]
+        #[arg(long, conflicts_with = "resume")]
         optimizer: Option<kinsynth::scenario::Algorithm>,
         /// Edge checker. Default: the scenario's.
-        #[arg(long)]
+        #[arg(long, conflicts_with = "resume")]
         checker: Option<kinsynth::collision::CheckerKind>,
         /// Step bound L_max. Default: the scenario's.
-        #[arg(long)]
+        #[arg(long, conflicts_with = "resume")]
         lmax: Option<f64>,
         /// The paper's baseline: ASA with node-only (discrete) checks at L_max = π/40.
-        #[arg(long, conflicts_with_all = ["optimizer", "checker", "lmax"])]
+        #[arg(long, conflicts_with_all = ["optimizer", "checker", "lmax", "resume"])]
         baseline: bool,
         /// Seed. Default: the scenario's.
-        #[arg(long)]
+        #[arg(long, conflicts_with = "resume")]
         seed: Option<u64>,
-        /// Wall-clock budget in seconds. Default: the scenario's.
+        /// Wall-clock budget in seconds, over the whole run (with --resume: a new total, which
+        /// extends the run). Default: the scenario's.
         #[arg(long)]
         time_limit: Option<f64>,
-        /// Budget in objective evaluations. Default: the scenario's.
+        /// Budget in objective evaluations, over the whole run (with --resume: a new total).
+        /// Default: the scenario's.
         #[arg(long)]
-        evaluations: Option<u64>,
+        evaluations: Option<f64>,
         /// Seconds between checkpoints. Default: the scenario's.
         #[arg(long)]
         checkpoint_interval: Option<f64>,
+        /// Fresh planner seeds the final candidates are re-checked with (0: none). Default:
+        /// the scenario's optimizer.recheck_seeds.
+        #[arg(long)]
+        recheck_seeds: Option<f64>,
+        /// Extra planner runs that confirm every R = 1 an evaluation claims. Default: the
+        /// scenario's optimizer.confirm_seeds.
+        #[arg(long, conflicts_with = "resume")]
+        confirm_seeds: Option<f64>,
         /// Output directory.
-        #[arg(long, required_unless_present = "resume")]
+        #[arg(long, required_unless_present = "resume", conflicts_with = "resume")]
         out: Option<PathBuf>,
         /// Continue the run whose checkpoint is in this directory (results go there too).
         #[arg(long)]
@@ -85,6 +111,11 @@ enum Command {
     /// Reproduce the paper's experiments: §IV-A (paper-2d: GA, PSO, ASA with segment at π/4
     /// against the ASA + discrete π/40 baseline) or §IV-B (paper-3d: GA), averaged over random
     /// workspaces.
+    ///
+    /// Writes into --out: runs.csv (one row per run), curves.csv and curves.svg (average
+    /// reachability against time), and per workspace w: workspace{w}/scenario.toml and, per
+    /// method k, workspace{w}/method{k}/ with every file `optimize` writes.
+    #[command(allow_negative_numbers = true)]
     Experiment {
         /// paper-2d or paper-3d.
         preset: Preset,
@@ -102,6 +133,12 @@ enum Command {
         out: PathBuf,
     },
     /// Reachability of a design: the share of task points an RRT from home reaches.
+    ///
+    /// A best.json is replayed: without --seed, the planner seed, random stream and settings
+    /// of the evaluation that produced it give the same R and paths. Writes the report to
+    /// --json FILE and task_{i}.csv and task_{i}.json per reached task into --trajectories
+    /// DIR, when given; nothing otherwise.
+    #[command(allow_negative_numbers = true)]
     Reach {
         /// The scenario file (TOML).
         file: PathBuf,
@@ -114,18 +151,23 @@ enum Command {
         /// Step bound L_max. Default: the scenario's.
         #[arg(long)]
         lmax: Option<f64>,
-        /// Seed of the planner. Default: the scenario's.
+        /// Seed of the planner. Default: the scenario's (for a best.json: its own, replayed).
         #[arg(long)]
         seed: Option<u64>,
+        /// Plan with N planner seeds (--seed and the N − 1 after it) and report the spread of
+        /// R: min, mean and max. The report and trajectories are those of the first seed.
+        #[arg(long)]
+        seeds: Option<f64>,
         /// Write the report as JSON to this file (atomically).
         #[arg(long)]
         json: Option<PathBuf>,
         #[command(flatten)]
         urdf: UrdfReach,
     },
-    /// Export a design (design JSON or best.json) as a URDF robot, and its SRDF (planning group
-    /// and allowed-collision matrix) beside it: writes OUTPUT and OUTPUT with the extension
-    /// .srdf.
+    /// Export a design (design JSON or best.json) as a URDF robot and its SRDF.
+    ///
+    /// Writes the file given by -o and, beside it, the same name with the extension .srdf
+    /// (planning group and allowed-collision matrix).
     Urdf {
         /// The design JSON, or an optimiser's best.json.
         design: PathBuf,
@@ -139,6 +181,9 @@ enum Command {
         scenario: Option<PathBuf>,
     },
     /// Compare the four edge checkers with the dense-sampling oracle on random edges.
+    ///
+    /// Prints a table; writes no files.
+    #[command(allow_negative_numbers = true)]
     Edges {
         /// The scenario file (TOML).
         file: PathBuf,
@@ -179,6 +224,23 @@ fn override_planner(
         planner.schedule = None;
     }
     Ok(())
+}
+
+/// The largest evaluation budget `--evaluations` accepts.
+const MAX_EVALUATIONS: u64 = 1_000_000_000_000;
+
+/// A whole number given as `flag`: refused, naming the flag and the value, unless it is an
+/// integer in `min..=max`.
+fn whole(flag: &str, v: Option<f64>, min: u64, max: u64) -> Result<Option<u64>, kinsynth::Error> {
+    match v {
+        None => Ok(None),
+        Some(x) if x.fract() == 0.0 && x >= min as f64 && x <= max as f64 => Ok(Some(x as u64)),
+        Some(x) => Err(kinsynth::Error::invalid(
+            flag,
+            x,
+            format!("must be a whole number from {min} to {max}"),
+        )),
+    }
 }
 
 /// `reach` options for evaluating an existing URDF robot and writing trajectories.
@@ -264,31 +326,74 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
             time_limit,
             evaluations,
             checkpoint_interval,
+            recheck_seeds,
+            confirm_seeds,
             out,
             resume,
             quiet,
         } => {
-            use kinsynth::optimize::runner::{Checkpoint, RunOptions, Runner};
-            let (scenario_path, out, checkpoint): (PathBuf, PathBuf, Option<Checkpoint>) =
-                match resume {
-                    Some(dir) => {
-                        let c = Runner::read_checkpoint(&dir)?;
-                        (c.scenario.clone(), dir, Some(c))
-                    }
-                    None => {
-                        let Some(f) = file else {
-                            return Err(kinsynth::Error::invalid(
-                                "SCENARIO",
-                                "missing",
-                                "give a scenario file (or --resume DIR)",
-                            ));
-                        };
-                        (f, out.expect("clap requires --out without --resume"), None)
-                    }
-                };
+            use kinsynth::optimize::lock::OutputLock;
+            use kinsynth::optimize::runner::{check_seconds, Checkpoint, RunOptions, Runner};
+            if let Some(t) = time_limit {
+                check_seconds("--time-limit", t)?;
+            }
+            if let Some(t) = checkpoint_interval {
+                check_seconds("--checkpoint-interval", t)?;
+            }
+            let max_seeds = kinsynth::optimize::runner::MAX_SEEDS as u64;
+            let evaluations = whole("--evaluations", evaluations, 1, MAX_EVALUATIONS)?;
+            let recheck_seeds =
+                whole("--recheck-seeds", recheck_seeds, 0, max_seeds)?.map(|n| n as usize);
+            let confirm_seeds =
+                whole("--confirm-seeds", confirm_seeds, 0, max_seeds)?.map(|n| n as usize);
+            let out = match (&resume, out) {
+                (Some(dir), _) => dir.clone(),
+                (None, Some(out)) => out,
+                (None, None) => {
+                    return Err(kinsynth::Error::invalid(
+                        "--out",
+                        "missing",
+                        "give an output directory (or --resume DIR)",
+                    ))
+                }
+            };
+            let checkpoint = match &resume {
+                Some(dir) => Some(Runner::read_checkpoint(dir)?),
+                None => None,
+            };
+            if let Some(l) = lmax {
+                override_planner(&mut Default::default(), None, Some(l))?;
+            }
+            let scenario_path = match (&checkpoint, file) {
+                (_, Some(f)) => f,
+                (Some(c), None) => c.scenario.clone(),
+                (None, None) => {
+                    return Err(kinsynth::Error::invalid(
+                        "SCENARIO",
+                        "missing",
+                        "give a scenario file (or --resume DIR)",
+                    ))
+                }
+            };
             let s = Scenario::load(&scenario_path)?;
-            let (planner, options) = match &checkpoint {
-                Some(c) => (c.planner.clone(), c.options.clone()),
+            let settings = |checkpoint: &Option<Checkpoint>| match checkpoint {
+                Some(c) => {
+                    let mut options = c.options.clone();
+                    // A budget given again replaces the checkpoint's: the run goes on to it.
+                    if time_limit.is_some() {
+                        options.time_limit = time_limit;
+                    }
+                    if evaluations.is_some() {
+                        options.evaluations = evaluations;
+                    }
+                    if let Some(t) = checkpoint_interval {
+                        options.checkpoint_interval = t;
+                    }
+                    if let Some(k) = recheck_seeds {
+                        options.recheck_seeds = k;
+                    }
+                    Ok((c.planner.clone(), options))
+                }
                 None => {
                     let mut planner = s.planner.clone();
                     let mut algorithm = s.optimizer.algorithm;
@@ -310,23 +415,54 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
                         patience: s.optimizer.patience,
                         checkpoint_interval: checkpoint_interval
                             .unwrap_or(s.optimizer.checkpoint_interval),
+                        recheck_seeds: recheck_seeds.unwrap_or(s.optimizer.recheck_seeds),
+                        confirm_seeds: confirm_seeds.unwrap_or(s.optimizer.confirm_seeds),
                     };
-                    if options.time_limit.is_none() && options.evaluations.is_none() {
-                        return Err(kinsynth::Error::invalid(
-                            "budget",
-                            "none",
-                            "give --time-limit or --evaluations (or set them in [optimizer])",
-                        ));
-                    }
-                    (planner, options)
+                    Ok((planner, options))
                 }
             };
+            let (_, options) = settings(&checkpoint)?;
+            if options.time_limit.is_none() && options.evaluations.is_none() {
+                return Err(kinsynth::Error::invalid(
+                    "budget",
+                    "none",
+                    "give --time-limit or --evaluations (or set them in [optimizer])",
+                ));
+            }
+            let (lock, acquired) = OutputLock::acquire(&out)?;
+            if let Some(o) = &acquired.took_over {
+                eprintln!(
+                    "warning: {}: taking over the lock of pid {} on host {} ({}), which is no longer running",
+                    lock.path().display(),
+                    o.pid,
+                    o.host,
+                    o.command
+                );
+            }
+            if !acquired.removed.is_empty() {
+                eprintln!(
+                    "warning: {}: removed {} temporary file(s) left by a killed run",
+                    out.display(),
+                    acquired.removed.len()
+                );
+            }
+            let _ = LOCK_PATH.set(lock.path().to_path_buf());
+            // Read again under the lock: the state the last run left.
+            let checkpoint = match &resume {
+                Some(dir) => Some(Runner::read_checkpoint(dir)?),
+                None => None,
+            };
+            let (planner, options) = settings(&checkpoint)?;
             let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
             {
                 let stop = stop.clone();
-                // A second Ctrl-C while results are written ends the process at once.
+                // A second Ctrl-C while results are written ends the process at once (and
+                // removes the lock file; the operating system releases the lock itself).
                 let _ = ctrlc::set_handler(move || {
                     if stop.swap(true, std::sync::atomic::Ordering::SeqCst) {
+                        if let Some(p) = LOCK_PATH.get() {
+                            let _ = std::fs::remove_file(p);
+                        }
                         std::process::exit(130);
                     }
                 });
@@ -334,8 +470,17 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
             let runner = Runner::new(&s, &scenario_path, planner.clone(), options.clone(), &out);
             let mut observer = progress::Bar::new(&options, quiet);
             let summary = runner.run(checkpoint, &stop, &mut observer)?;
+            let robust = summary.robust_reachability.as_ref().map_or_else(
+                || "no re-check".to_string(),
+                |r| {
+                    format!(
+                        "re-checked with {} seeds: R min {:.3}, mean {:.3}, max {:.3}, {:.1} s",
+                        r.seeds, r.min, r.mean, r.max, summary.recheck_s
+                    )
+                },
+            );
             say!(
-                "{}: {} + {} (L_max {:.4}), seed {}: R = {:.3}, cost {:.4}, {} links and {} joints kept, total length {:.3} m; {} evaluations in {:.1} s ({})",
+                "{}: {} + {} (L_max {:.4}), seed {}: R = {:.3} ({robust}), cost {:.4}, {} links and {} joints kept, total length {:.3} m; {} evaluations in {:.1} s ({})",
                 out.display(),
                 summary.optimizer,
                 summary.checker,
@@ -350,6 +495,7 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
                 summary.elapsed_s,
                 summary.stopped
             );
+            drop(lock);
         }
         Command::Experiment {
             preset: p,
@@ -407,10 +553,19 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
             checker,
             lmax,
             seed,
+            seeds,
             json,
             urdf,
         } => {
+            use rayon::prelude::*;
             let s = Scenario::load(&file)?;
+            let max_seeds = kinsynth::optimize::runner::MAX_SEEDS as u64;
+            let seeds = whole("--seeds", seeds, 1, max_seeds)?;
+            // A best.json without --seed or --seeds replays the evaluation that produced it.
+            let replay = match (&design, seed, seeds) {
+                (Some(p), None, None) => kinsynth::optimize::runner::Replay::from_best(p)?,
+                _ => None,
+            };
             let (chain, urdf_names) = match &urdf.urdf {
                 Some(p) => {
                     let r = kinsynth::import::load_chain(
@@ -422,35 +577,85 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
                     )?;
                     (r.chain, Some(r.joint_names))
                 }
-                None => match design {
-                    Some(p) => (kinsynth::Design::load(&p)?.chain(), None),
+                None => match &design {
+                    Some(p) => (kinsynth::Design::load(p)?.chain(), None),
                     None => (s.space.largest().chain(), None),
                 },
             };
-            let mut planner = s.planner.clone();
+            let mut planner = replay
+                .as_ref()
+                .map_or_else(|| s.planner.clone(), |r| r.planner.clone());
             override_planner(&mut planner, checker, lmax)?;
-            let seed = seed.unwrap_or(s.seed);
+            let (first_seed, stream) = match &replay {
+                Some(r) => {
+                    say!(
+                        "replaying the evaluation that produced {}: planner seed {}, stream {}",
+                        design
+                            .as_ref()
+                            .map_or(String::new(), |p| p.display().to_string()),
+                        r.seed,
+                        r.stream
+                    );
+                    (r.seed, r.stream)
+                }
+                None => (seed.unwrap_or(s.seed), 0),
+            };
+            let n = seeds.unwrap_or(1);
             let scene = std::sync::Arc::new(kinsynth::collision::CollisionScene::new(&s.workspace));
             let start = std::time::Instant::now();
-            let mut report = kinsynth::planning::reachability(
-                &chain,
-                &scene,
-                &s.workspace.tasks,
-                &planner,
-                seed,
-                0,
-            );
+            let mut reports: Vec<kinsynth::planning::ReachReport> = (0..n)
+                .into_par_iter()
+                .map(|k| {
+                    kinsynth::planning::reachability(
+                        &chain,
+                        &scene,
+                        &s.workspace.tasks,
+                        &planner,
+                        first_seed.wrapping_add(k),
+                        stream,
+                    )
+                })
+                .collect();
             let elapsed = start.elapsed();
+            let spread = (n > 1).then(|| {
+                let r: Vec<f64> = reports.iter().map(|r| r.reachability).collect();
+                let min = r.iter().copied().fold(f64::INFINITY, f64::min);
+                let max = r.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                let mean = r.iter().sum::<f64>() / r.len() as f64;
+                for (k, rep) in reports.iter().enumerate() {
+                    say!(
+                        "seed {}: R = {:.3} ({} of {} tasks)",
+                        first_seed.wrapping_add(k as u64),
+                        rep.reachability,
+                        rep.reached(),
+                        rep.targets.len()
+                    );
+                }
+                say!(
+                    "R over {n} seeds ({}–{}): min {min:.3}, mean {mean:.3}, max {max:.3}",
+                    first_seed,
+                    first_seed.wrapping_add(n - 1)
+                );
+                serde_json::json!({
+                    "seeds": (0..n).map(|k| first_seed.wrapping_add(k)).collect::<Vec<_>>(),
+                    "reachability": r,
+                    "min": min,
+                    "mean": mean,
+                    "max": max,
+                })
+            });
+            let mut report = reports.swap_remove(0);
             if let Some(names) = &urdf_names {
                 kinsynth::import::urdf::rename_joints(&mut report, names);
             }
             say!(
-                "R = {:.3} ({} of {} tasks) with {} at L_max {:.4}, seed {seed}: {} iterations, {} nodes, {} edge checks, {:.1} ms",
+                "R = {:.3} ({} of {} tasks) with {} at L_max {:.4}, seed {first_seed}{}: {} iterations, {} nodes, {} edge checks, {:.1} ms",
                 report.reachability,
                 report.reached(),
                 report.targets.len(),
                 report.checker,
                 report.l_max,
+                if stream == 0 { String::new() } else { format!(" stream {stream}") },
                 report.iterations,
                 report.nodes,
                 report.edge_checks,
@@ -471,7 +676,13 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
                 );
             }
             if let Some(path) = json {
-                kinsynth::io::write_atomic(&path, report.to_json().as_bytes())?;
+                let mut v = serde_json::to_value(&report).expect("a report serialises");
+                v["stream"] = stream.into();
+                if let Some(spread) = spread {
+                    v["spread"] = spread;
+                }
+                let text = serde_json::to_string_pretty(&v).expect("a report serialises");
+                kinsynth::io::write_atomic(&path, text.as_bytes())?;
             }
             if let Some(dir) = &urdf.trajectories {
                 let files = kinsynth::export::trajectory::write_trajectories(&report, dir)?;

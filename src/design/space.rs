@@ -186,9 +186,29 @@ impl DesignSpace {
     ///    axis stops being a joint.
     ///
     /// # Panics
-    /// When `x.len() != self.dim()`.
+    /// When `x.len() != self.dim()`; [`DesignSpace::try_decode`] returns an error instead.
     pub fn decode(&self, x: &[f64]) -> Design {
         assert_eq!(x.len(), self.variables.len(), "design vector length");
+        self.decode_unchecked(x)
+    }
+
+    /// [`DesignSpace::decode`] for a vector from outside (a file): a vector whose length is
+    /// not [`DesignSpace::dim`] is an error naming both lengths.
+    pub fn try_decode(&self, x: &[f64]) -> Result<Design> {
+        if x.len() != self.variables.len() {
+            return Err(Error::invalid(
+                "design vector",
+                format!("{} values", x.len()),
+                format!(
+                    "the design space has {} free variables",
+                    self.variables.len()
+                ),
+            ));
+        }
+        Ok(self.decode_unchecked(x))
+    }
+
+    fn decode_unchecked(&self, x: &[f64]) -> Design {
         let mut d = self.template.clone();
         let snap = |v: f64| if v.abs() < self.snap { 0.0 } else { v };
         for (v, &val) in self.variables.iter().zip(x) {
@@ -321,6 +341,20 @@ mod tests {
         assert_eq!(d.links[0].axes.get(Axis::Tx), Range::new(-0.2, 0.8));
         let d = s.decode(&[0.5, 0.5004]);
         assert_eq!(d.links[0].axes.get(Axis::Tx), Range::new(0.5002, 0.5002));
+    }
+
+    #[test]
+    fn try_decode_refuses_a_vector_of_the_wrong_length() {
+        let s = space(1e-3);
+        let e = s.try_decode(&[0.1, 0.2]).unwrap_err().to_string();
+        assert!(
+            e.contains("2 values") && e.contains("3 free variables"),
+            "{e}"
+        );
+        assert_eq!(
+            s.try_decode(&[0.3, -1.0, 2.0]).unwrap(),
+            s.decode(&[0.3, -1.0, 2.0])
+        );
     }
 
     #[test]

@@ -17,7 +17,8 @@
 //! acceptance temperature restarts from the best cost's scale.
 
 use super::{
-    evaluate_batch, keep_best, random_point, Evaluated, Optimizer, StepContext, StepReport,
+    check_len, check_points, evaluate_batch, keep_best, random_point, Evaluated, Optimizer,
+    StepContext, StepReport,
 };
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
@@ -240,5 +241,22 @@ impl Optimizer for Asa {
 
     fn save(&self) -> serde_json::Value {
         serde_json::to_value(self).expect("ASA state serialises")
+    }
+
+    fn candidates(&self) -> Vec<&Evaluated> {
+        self.current.iter().chain(self.best.as_ref()).collect()
+    }
+
+    fn validate(&self, dim: usize) -> Result<(), String> {
+        check_points(&self.seeds, self.best.as_ref(), dim)?;
+        if let Some(c) = &self.current {
+            check_len("current.x", &c.x, dim)?;
+            check_len("k", &self.k, dim)?;
+            check_len("t0", &self.t0, dim)?;
+            if self.best.is_none() {
+                return Err("best is missing while current is set".into());
+            }
+        }
+        Ok(())
     }
 }

@@ -153,6 +153,10 @@ pub fn run_experiment(
                 evaluations: None,
                 patience: scenario.optimizer.patience,
                 checkpoint_interval: 1e9, // only the final checkpoint
+                // The paper's method as published: one planner run per evaluation, no final
+                // re-check, so the times to R = 1 compare with its figures.
+                recheck_seeds: 0,
+                confirm_seeds: 0,
             };
             let run_dir = dir.join(format!("method{k}"));
             let runner = Runner::new(&scenario, &scenario_path, planner, options, &run_dir);

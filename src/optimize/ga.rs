@@ -3,7 +3,8 @@
 //! sets a variable to zero, and elitism.
 
 use super::{
-    evaluate_batch, keep_best, random_point, Evaluated, Optimizer, StepContext, StepReport,
+    check_len, check_points, evaluate_batch, keep_best, random_point, Evaluated, Optimizer,
+    StepContext, StepReport,
 };
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
@@ -211,6 +212,21 @@ impl Optimizer for Ga {
 
     fn save(&self) -> serde_json::Value {
         serde_json::to_value(self).expect("GA state serialises")
+    }
+
+    fn candidates(&self) -> Vec<&Evaluated> {
+        self.population.iter().chain(self.best.as_ref()).collect()
+    }
+
+    fn validate(&self, dim: usize) -> Result<(), String> {
+        check_points(&self.seeds, self.best.as_ref(), dim)?;
+        for (i, e) in self.population.iter().enumerate() {
+            check_len(&format!("population[{i}].x"), &e.x, dim)?;
+        }
+        if !self.population.is_empty() && self.best.is_none() {
+            return Err("best is missing while the population is not empty".into());
+        }
+        Ok(())
     }
 }
 

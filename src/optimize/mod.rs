@@ -5,6 +5,7 @@
 pub mod asa;
 pub mod experiment;
 pub mod ga;
+pub mod lock;
 pub mod objective;
 pub mod pso;
 pub mod runner;
@@ -109,6 +110,43 @@ pub trait Optimizer: Send {
     fn best(&self) -> Option<&Evaluated>;
     /// The state as JSON, for checkpoints.
     fn save(&self) -> serde_json::Value;
+    /// The points the optimiser would offer as its result, best first or in any order: the
+    /// final population, the personal bests or the annealer's current and best points. The
+    /// runner re-checks the best of them with fresh planner seeds.
+    fn candidates(&self) -> Vec<&Evaluated>;
+    /// Checks a restored state against a problem of dimension `dim`: every point and vector
+    /// has `dim` values, every index is in range. The error names the field of the state, e.g.
+    /// `population[3].x has 10 values, the problem 8`.
+    fn validate(&self, dim: usize) -> Result<(), String>;
+}
+
+/// Checks that `v` (the state field `field`) has `dim` finite values.
+pub(crate) fn check_len(field: &str, v: &[f64], dim: usize) -> Result<(), String> {
+    if v.len() != dim {
+        return Err(format!(
+            "{field} has {} values, the design space {dim}",
+            v.len()
+        ));
+    }
+    if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+        return Err(format!("{field}[{i}] = {}: must be finite", v[i]));
+    }
+    Ok(())
+}
+
+/// Checks an optional incumbent and the seed points of a restored state.
+pub(crate) fn check_points(
+    seeds: &[Vec<f64>],
+    best: Option<&Evaluated>,
+    dim: usize,
+) -> Result<(), String> {
+    for (i, x) in seeds.iter().enumerate() {
+        check_len(&format!("seeds[{i}]"), x, dim)?;
+    }
+    if let Some(b) = best {
+        check_len("best.x", &b.x, dim)?;
+    }
+    Ok(())
 }
 
 /// Uniform random point in the box.

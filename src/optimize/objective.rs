@@ -72,6 +72,26 @@ pub fn breakdown(design: &Design, r: f64, w: &ObjectiveWeights) -> Breakdown {
     }
 }
 
+/// Offset of the random streams that confirm a claimed `R = 1` (see
+/// [`Objective::with_confirmation`]): confirmation `j` of evaluation `k` plans with the stream
+/// `CONFIRM_STREAM + k·m + j`, apart from the evaluations' own streams `k`.
+pub const CONFIRM_STREAM: u64 = 1 << 52;
+
+/// One evaluation of a design: the reachability report of the planner run that set its `R`, the
+/// stream of that run and the terms of Eq. 23.
+#[derive(Clone, Debug)]
+pub struct Evaluation {
+    /// The report of the planner run that set `R` (replaying its stream gives the same `R` and
+    /// paths).
+    pub report: ReachReport,
+    /// The random stream of that planner run.
+    pub stream: u64,
+    /// Planner runs made (1, or more when a claimed `R = 1` was confirmed).
+    pub planner_runs: usize,
+    /// The terms of Eq. 23 with that run's `R`.
+    pub breakdown: Breakdown,
+}
+
 /// The design problem: decode a vector, plan, score. Implements [`Problem`] for the
 /// optimisers.
 pub struct Objective {
@@ -81,6 +101,7 @@ pub struct Objective {
     planner: PlannerConfig,
     weights: ObjectiveWeights,
     seed: u64,
+    confirm: usize,
     lower: Vec<f64>,
     upper: Vec<f64>,
 }
@@ -98,6 +119,69 @@ impl Objective {
             planner,
             weights: scenario.objective.clone(),
             seed,
+            confirm: 0,
+        }
+    }
+
+    /// Confirms every claimed `R = 1` with `m` more planner runs on their own random streams
+    /// ([`CONFIRM_STREAM`]): the first run that falls short sets the design's `R`. A design that reaches a
+    /// task only in a lucky run (at the edge of the goal tolerance) then rarely scores `R = 1`.
+    pub fn with_confirmation(mut self, m: usize) -> Self {
+        self.confirm = m;
+        self
+    }
+
+    /// The planner's seed (the run's seed).
+    pub fn seed(&self) -> u64 {
+        self.seed
+    }
+
+    /// The objective's weights.
+    pub fn weights(&self) -> &ObjectiveWeights {
+        &self.weights
+    }
+
+    /// One planner run for `x` with the random stream `(seed, stream)`: its report and the
+    /// breakdown of Eq. 23. No confirmation.
+    pub fn plan_once(&self, x: &[f64], stream: u64, progress: f64) -> (ReachReport, Breakdown) {
+        let design = self.space.decode(x);
+        let chain = design.chain();
+        let report = reachability(
+            &chain,
+            &self.scene,
+            &self.tasks,
+            &self.planner_at(progress),
+            self.seed,
+            stream,
+        );
+        let b = breakdown(&design, report.reachability, &self.weights);
+        (report, b)
+    }
+
+    /// Evaluates `x` as the optimisers do: one planner run on `stream`, and when it reaches
+    /// every task, the confirmation runs; the first of them that falls short sets `R`.
+    pub fn evaluate_confirmed(&self, x: &[f64], stream: u64, progress: f64) -> Evaluation {
+        let (mut report, mut b) = self.plan_once(x, stream, progress);
+        let mut worst = stream;
+        let mut planner_runs = 1;
+        if report.reachability >= 1.0 {
+            for j in 0..self.confirm as u64 {
+                let s = CONFIRM_STREAM
+                    .wrapping_add(stream.wrapping_mul(self.confirm as u64))
+                    .wrapping_add(j);
+                let (r, rb) = self.plan_once(x, s, progress);
+                planner_runs += 1;
+                if r.reachability < report.reachability {
+                    (report, b, worst) = (r, rb, s);
+                    break;
+                }
+            }
+        }
+        Evaluation {
+            report,
+            stream: worst,
+            planner_runs,
+            breakdown: b,
         }
     }
 
@@ -116,20 +200,11 @@ impl Objective {
         p
     }
 
-    /// Plans for `x` and returns the reachability report and the breakdown of Eq. 23.
+    /// Plans for `x` as [`Objective::evaluate_confirmed`] does and returns the report of the
+    /// run that set `R` and the breakdown of Eq. 23.
     pub fn evaluate_full(&self, x: &[f64], stream: u64, progress: f64) -> (ReachReport, Breakdown) {
-        let design = self.space.decode(x);
-        let chain = design.chain();
-        let report = reachability(
-            &chain,
-            &self.scene,
-            &self.tasks,
-            &self.planner_at(progress),
-            self.seed,
-            stream,
-        );
-        let b = breakdown(&design, report.reachability, &self.weights);
-        (report, b)
+        let e = self.evaluate_confirmed(x, stream, progress);
+        (e.report, e.breakdown)
     }
 }
 
@@ -141,7 +216,7 @@ impl Problem for Objective {
         &self.upper
     }
     fn evaluate(&self, x: &[f64], stream: u64, progress: f64) -> (f64, f64) {
-        let (_, b) = self.evaluate_full(x, stream, progress);
+        let b = self.evaluate_confirmed(x, stream, progress).breakdown;
         (b.cost, b.reachability)
     }
 }

@@ -9,7 +9,8 @@
 //! * `global`: the classic swarm, pulled toward its own best and the swarm's best.
 
 use super::{
-    evaluate_batch, keep_best, random_point, Evaluated, Optimizer, StepContext, StepReport,
+    check_len, check_points, evaluate_batch, keep_best, random_point, Evaluated, Optimizer,
+    StepContext, StepReport,
 };
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
@@ -265,5 +266,38 @@ impl Optimizer for Pso {
 
     fn save(&self) -> serde_json::Value {
         serde_json::to_value(self).expect("PSO state serialises")
+    }
+
+    fn candidates(&self) -> Vec<&Evaluated> {
+        self.particles
+            .iter()
+            .map(|p| &p.best)
+            .chain(self.best.as_ref())
+            .collect()
+    }
+
+    fn validate(&self, dim: usize) -> Result<(), String> {
+        check_points(&self.seeds, self.best.as_ref(), dim)?;
+        let n = self.particles.len();
+        for (i, p) in self.particles.iter().enumerate() {
+            check_len(&format!("particles[{i}].x"), &p.x, dim)?;
+            check_len(&format!("particles[{i}].v"), &p.v, dim)?;
+            check_len(&format!("particles[{i}].best.x"), &p.best.x, dim)?;
+            if !p.exemplar.is_empty() && p.exemplar.len() != dim {
+                return Err(format!(
+                    "particles[{i}].exemplar has {} values, the design space {dim}",
+                    p.exemplar.len()
+                ));
+            }
+            if let Some(e) = p.exemplar.iter().find(|&&e| e >= n) {
+                return Err(format!(
+                    "particles[{i}].exemplar names particle {e}: there are {n}"
+                ));
+            }
+        }
+        if n > 0 && self.best.is_none() {
+            return Err("best is missing while the swarm is not empty".into());
+        }
+        Ok(())
     }
 }

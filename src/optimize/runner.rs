@@ -4,7 +4,7 @@ use super::asa::Asa;
 use super::ga::{Ga, GaParams};
 use super::objective::{Breakdown, Objective};
 use super::pso::{Pso, PsoParams};
-use super::{Optimizer, StepContext};
+use super::{Evaluated, Optimizer, StepContext};
 use crate::error::{Error, Result};
 use crate::io::write_atomic;
 use crate::planning::ReachReport;
@@ -32,6 +32,100 @@ pub struct RunOptions {
     pub patience: usize,
     /// Seconds between checkpoints (0: after every generation).
     pub checkpoint_interval: f64,
+    /// Fresh planner seeds the final candidates are re-checked with before the run ends
+    /// (0: no re-check).
+    #[serde(default = "default_recheck_seeds")]
+    pub recheck_seeds: usize,
+    /// Extra planner runs that confirm every claimed `R = 1` during the run
+    /// ([`Objective::with_confirmation`]).
+    #[serde(default)]
+    pub confirm_seeds: usize,
+}
+
+fn default_recheck_seeds() -> usize {
+    crate::scenario::OptimizerConfig::default().recheck_seeds
+}
+
+/// The largest number of re-check seeds or confirmation runs a run accepts.
+pub const MAX_SEEDS: usize = 1000;
+
+impl RunOptions {
+    /// Checks the budgets and counts: finite, non-negative seconds, at least one evaluation,
+    /// at most [`MAX_SEEDS`] seeds. Errors name the field (`time_limit`, …) and the value.
+    pub fn validate(&self) -> Result<()> {
+        if let Some(t) = self.time_limit {
+            check_seconds("time_limit", t)?;
+        }
+        check_seconds("checkpoint_interval", self.checkpoint_interval)?;
+        if self.evaluations == Some(0) {
+            return Err(Error::invalid("evaluations", 0, "must be at least 1"));
+        }
+        for (field, n) in [
+            ("recheck_seeds", self.recheck_seeds),
+            ("confirm_seeds", self.confirm_seeds),
+        ] {
+            if n > MAX_SEEDS {
+                return Err(Error::invalid(
+                    field,
+                    n,
+                    format!("must be at most {MAX_SEEDS}"),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Checks planner settings read from a checkpoint or a `best.json` as a scenario's are checked;
+/// errors name the field (`planner.l_max`, …).
+pub fn check_planner(p: &crate::planning::PlannerConfig) -> Result<()> {
+    let positive = |field: &str, v: f64| {
+        if v.is_finite() && v > 0.0 {
+            Ok(())
+        } else {
+            Err(Error::invalid(field, v, "must be positive and finite"))
+        }
+    };
+    positive("planner.l_max", p.l_max)?;
+    positive("planner.goal_tolerance", p.goal_tolerance)?;
+    if let Some(t) = p.time_limit {
+        positive("planner.time_limit", t)?;
+    }
+    if !(p.lambda.is_finite() && p.lambda >= 0.0) {
+        return Err(Error::invalid(
+            "planner.lambda",
+            p.lambda,
+            "must be finite and not negative",
+        ));
+    }
+    if !(0.0..=1.0).contains(&p.goal_bias) {
+        return Err(Error::invalid(
+            "planner.goal_bias",
+            p.goal_bias,
+            "must lie in [0, 1]",
+        ));
+    }
+    if p.max_iterations == 0 {
+        return Err(Error::invalid(
+            "planner.max_iterations",
+            0,
+            "must be at least 1",
+        ));
+    }
+    Ok(())
+}
+
+/// A number of seconds given as `field` must be finite and not negative.
+pub fn check_seconds(field: &str, value: f64) -> Result<()> {
+    if value.is_finite() && value >= 0.0 {
+        Ok(())
+    } else {
+        Err(Error::invalid(
+            field,
+            value,
+            "must be a finite, non-negative number of seconds",
+        ))
+    }
 }
 
 /// One row of `history.csv`: the state after a generation.
@@ -72,6 +166,178 @@ pub struct Checkpoint {
     pub history: Vec<HistoryRow>,
     /// The optimiser's state.
     pub state: serde_json::Value,
+    /// Hash of the scenario file's contents when the run started ([`fingerprint`]).
+    #[serde(default)]
+    pub scenario_hash: Option<String>,
+    /// The scenario's shape when the run started: links, free variables, obstacles, tasks.
+    #[serde(default)]
+    pub scenario_shape: Option<ScenarioShape>,
+}
+
+/// One free design variable as a checkpoint records it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct VariableShape {
+    /// Name, e.g. `link3.a`.
+    pub name: String,
+    /// Lower bound.
+    pub lower: f64,
+    /// Upper bound.
+    pub upper: f64,
+}
+
+impl std::fmt::Display for VariableShape {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} in [{}, {}]", self.name, self.lower, self.upper)
+    }
+}
+
+/// What a checkpoint must match in the scenario it resumes: the design space's variables and
+/// the sizes of the workspace.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ScenarioShape {
+    /// Links of the generic chain (`robot.links`).
+    pub links: usize,
+    /// Free design variables, in vector order.
+    pub variables: Vec<VariableShape>,
+    /// Obstacles.
+    pub obstacles: usize,
+    /// Task points.
+    pub tasks: usize,
+}
+
+impl ScenarioShape {
+    /// The shape of a scenario.
+    pub fn of(s: &Scenario) -> Self {
+        ScenarioShape {
+            links: s.space.template().links.len(),
+            variables: s
+                .space
+                .variables()
+                .iter()
+                .map(|v| VariableShape {
+                    name: v.name(),
+                    lower: v.lower,
+                    upper: v.upper,
+                })
+                .collect(),
+            obstacles: s.workspace.obstacles.len(),
+            tasks: s.workspace.tasks.len(),
+        }
+    }
+
+    /// The first difference between the shape a checkpoint recorded (`self`) and `now`, as
+    /// "robot.links was 8, now 10".
+    pub fn difference(&self, now: &ScenarioShape) -> Option<String> {
+        let count = |what: &str, was: usize, now: usize| {
+            (was != now).then(|| format!("{what} was {was}, now {now}"))
+        };
+        if let Some(d) = count("robot.links", self.links, now.links) {
+            return Some(d);
+        }
+        if let Some(d) = count(
+            "the number of free design variables",
+            self.variables.len(),
+            now.variables.len(),
+        ) {
+            let first = self
+                .variables
+                .iter()
+                .zip(&now.variables)
+                .position(|(a, b)| a != b)
+                .unwrap_or(self.variables.len().min(now.variables.len()));
+            let show = |v: Option<&VariableShape>| v.map_or("none".to_string(), |v| v.to_string());
+            return Some(format!(
+                "{d} (first difference: variable {first} was {}, now {})",
+                show(self.variables.get(first)),
+                show(now.variables.get(first))
+            ));
+        }
+        if let Some((i, (a, b))) = self
+            .variables
+            .iter()
+            .zip(&now.variables)
+            .enumerate()
+            .find(|(_, (a, b))| a != b)
+        {
+            return Some(format!("free variable {i} was {a}, now {b}"));
+        }
+        count("the number of obstacles", self.obstacles, now.obstacles)
+            .or_else(|| count("the number of tasks", self.tasks, now.tasks))
+    }
+}
+
+/// A stable fingerprint of a file's contents: 64-bit FNV-1a, as `fnv1a64:` and 16 hex digits.
+/// The same bytes give the same string on every run and platform.
+pub fn fingerprint(bytes: &[u8]) -> String {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for &b in bytes {
+        h ^= u64::from(b);
+        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    format!("fnv1a64:{h:016x}")
+}
+
+/// How `R` of a run's result held when re-checked with fresh planner seeds.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RobustReachability {
+    /// Planner seeds (random streams) of the re-check.
+    pub seeds: usize,
+    /// Stream of the first of them (the others follow) with the run's seed.
+    pub first_stream: u64,
+    /// Lowest `R` over the seeds: the robust figure the result is chosen by.
+    pub min: f64,
+    /// Mean `R`.
+    pub mean: f64,
+    /// Highest `R`.
+    pub max: f64,
+    /// `R` for each seed.
+    pub values: Vec<f64>,
+    /// Distinct final candidates that were re-checked.
+    pub candidates: usize,
+}
+
+/// The random stream, planner seed and settings of the evaluation that produced a `best.json`:
+/// enough for `kinsynth reach` to replay it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Replay {
+    /// Planner seed (the run's seed).
+    pub seed: u64,
+    /// Random stream of the planner run.
+    pub stream: u64,
+    /// Planner settings of that run.
+    pub planner: crate::planning::PlannerConfig,
+}
+
+impl Replay {
+    /// The replay data of a `best.json`, or `None` for another design file (or a `best.json`
+    /// written before streams were recorded).
+    pub fn from_best(path: &Path) -> Result<Option<Replay>> {
+        let text = std::fs::read_to_string(path).map_err(|source| Error::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| Error::Parse {
+            file: path.to_path_buf(),
+            message: e.to_string(),
+        })?;
+        let (Some(seed), Some(stream), Some(planner)) =
+            (v.get("seed"), v.get("stream"), v.get("planner"))
+        else {
+            return Ok(None);
+        };
+        let parse = |field: &str, e: serde_json::Error| Error::Parse {
+            file: path.to_path_buf(),
+            message: format!("{field}: {e}"),
+        };
+        let planner: crate::planning::PlannerConfig =
+            serde_json::from_value(planner.clone()).map_err(|e| parse("planner", e))?;
+        check_planner(&planner).map_err(|e| e.in_file(path))?;
+        Ok(Some(Replay {
+            seed: serde_json::from_value(seed.clone()).map_err(|e| parse("seed", e))?,
+            stream: serde_json::from_value(stream.clone()).map_err(|e| parse("stream", e))?,
+            planner,
+        }))
+    }
 }
 
 /// The result of a run: the best design and how it was found.
@@ -105,6 +371,20 @@ pub struct RunSummary {
     pub stopped: String,
     /// The terms of the objective for the best design.
     pub breakdown: Breakdown,
+    /// Random stream (with the planner seed `seed`) of the planner run that produced
+    /// `reachability`: `kinsynth reach --design best.json` replays it.
+    pub stream: u64,
+    /// Planner settings of that run (after overrides and any schedule).
+    pub planner: crate::planning::PlannerConfig,
+    /// `R` of the result re-checked with fresh planner seeds (absent when the re-check is off).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub robust_reachability: Option<RobustReachability>,
+    /// The cost of Eq. 23 with the lowest re-checked `R`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub robust_cost: Option<f64>,
+    /// Seconds the final re-check took (included in `elapsed_s`; not written to `best.json`).
+    #[serde(skip)]
+    pub recheck_s: f64,
 }
 
 fn make_optimizer(
@@ -132,17 +412,38 @@ fn make_optimizer(
     }
 }
 
-fn load_optimizer(algorithm: Algorithm, state: serde_json::Value) -> Result<Box<dyn Optimizer>> {
-    let bad = |e: serde_json::Error| Error::invalid("checkpoint.state", "…", e.to_string());
-    Ok(match algorithm {
+/// Restores the optimiser of a checkpoint and checks its state against the design space's
+/// dimension `dim`. Errors name the state's field.
+fn load_optimizer(
+    algorithm: Algorithm,
+    state: serde_json::Value,
+    dim: usize,
+) -> Result<Box<dyn Optimizer>> {
+    let bad = |e: serde_json::Error| Error::Parse {
+        file: PathBuf::new(),
+        message: format!("state: {e}"),
+    };
+    let optimizer: Box<dyn Optimizer> = match algorithm {
         Algorithm::Ga => Box::new(Ga::load(state).map_err(bad)?),
         Algorithm::Pso => Box::new(Pso::load(state).map_err(bad)?),
         Algorithm::Asa => Box::new(Asa::load(state).map_err(bad)?),
-    })
+    };
+    optimizer.validate(dim).map_err(|m| Error::Parse {
+        file: PathBuf::new(),
+        message: format!("state.{m}"),
+    })?;
+    Ok(optimizer)
 }
 
 /// Stream offset of the optimisers' own random numbers, apart from the planners' streams.
 const OPTIMIZER_STREAM: u64 = 1 << 48;
+
+/// Stream offset of the final re-check: seed `j` of the re-check plans with the stream
+/// `RECHECK_STREAM + j` for every candidate (common random numbers).
+pub const RECHECK_STREAM: u64 = 1 << 50;
+
+/// Distinct final candidates re-checked at the end of a run (the best by cost).
+pub const RECHECK_CANDIDATES: usize = 8;
 
 /// Names of the files a run writes into its output directory.
 pub mod files {
@@ -162,6 +463,15 @@ pub mod files {
     pub const SRDF: &str = "robot.srdf";
     /// Folder of the joint trajectories of the best design, one pair of files per reached task.
     pub const TRAJECTORIES: &str = "trajectories";
+}
+
+/// The counters of a run that a checkpoint records.
+#[derive(Clone, Copy)]
+struct Counters {
+    generation: u64,
+    evaluations: u64,
+    elapsed_s: f64,
+    stale: usize,
 }
 
 /// Observes a run: called after every generation (for progress displays).
@@ -237,7 +547,23 @@ impl<'a> Runner<'a> {
             path: self.out.clone(),
             source,
         })?;
-        let objective = Objective::new(self.scenario, self.planner.clone(), self.options.seed);
+        let checkpoint_path = self.out.join(files::CHECKPOINT);
+        let scenario_bytes = std::fs::read(&self.scenario_path).map_err(|source| Error::Read {
+            path: self.scenario_path.clone(),
+            source,
+        })?;
+        let scenario_hash = fingerprint(&scenario_bytes);
+        let shape = ScenarioShape::of(self.scenario);
+        if let Some(c) = &resume {
+            self.check_binding(c, &scenario_hash, &shape)
+                .map_err(|e| e.in_file(&checkpoint_path))?;
+            check_planner(&self.planner).map_err(|e| e.in_file(&checkpoint_path))?;
+        }
+        self.options
+            .validate()
+            .map_err(|e| e.in_file(&checkpoint_path))?;
+        let objective = Objective::new(self.scenario, self.planner.clone(), self.options.seed)
+            .with_confirmation(self.options.confirm_seeds);
         let o = &self.options;
         let (
             mut optimizer,
@@ -248,7 +574,8 @@ impl<'a> Runner<'a> {
             mut history,
         ) = match resume {
             Some(c) => (
-                load_optimizer(o.algorithm, c.state)?,
+                load_optimizer(o.algorithm, c.state, self.scenario.space.dim())
+                    .map_err(|e| e.in_file(&checkpoint_path))?,
                 c.generation,
                 c.evaluations,
                 c.elapsed_s,
@@ -316,7 +643,7 @@ impl<'a> Runner<'a> {
             } else {
                 stale += 1;
             }
-            let best_design = objective.space().decode(&best.x);
+            let best_design = objective.space().try_decode(&best.x)?;
             let row = HistoryRow {
                 elapsed_s: elapsed(),
                 evaluations,
@@ -330,11 +657,14 @@ impl<'a> Runner<'a> {
             if last_checkpoint.elapsed().as_secs_f64() >= o.checkpoint_interval {
                 self.write_checkpoint(
                     optimizer.as_ref(),
-                    generation,
-                    evaluations,
-                    elapsed(),
-                    stale,
+                    Counters {
+                        generation,
+                        evaluations,
+                        elapsed_s: elapsed(),
+                        stale,
+                    },
                     &history,
+                    (&scenario_hash, &shape),
                 )?;
                 last_checkpoint = Instant::now();
             }
@@ -342,19 +672,34 @@ impl<'a> Runner<'a> {
         observer.finish();
         self.write_checkpoint(
             optimizer.as_ref(),
-            generation,
-            evaluations,
-            elapsed(),
-            stale,
+            Counters {
+                generation,
+                evaluations,
+                elapsed_s: elapsed(),
+                stale,
+            },
             &history,
+            (&scenario_hash, &shape),
         )?;
         let best = optimizer
             .best()
             .cloned()
             .ok_or_else(|| Error::invalid("budget", 0, "the run stopped before any evaluation"))?;
-        let (report, breakdown) = objective.evaluate_full(&best.x, best.stream, best.progress);
+        let recheck_start = Instant::now();
+        let (best, robust) = self.recheck(&objective, optimizer.as_ref(), best)?;
+        let recheck_s = recheck_start.elapsed().as_secs_f64();
+        let evaluation = objective.evaluate_confirmed(&best.x, best.stream, best.progress);
+        let (report, breakdown) = (evaluation.report, evaluation.breakdown);
+        let robust_cost = robust.as_ref().map(|r| {
+            super::objective::breakdown(
+                &objective.space().decode(&best.x),
+                r.min,
+                objective.weights(),
+            )
+            .cost
+        });
         let summary = RunSummary {
-            design: objective.space().decode(&best.x),
+            design: objective.space().try_decode(&best.x)?,
             cost: breakdown.cost,
             reachability: breakdown.reachability,
             links_kept: breakdown.links_kept,
@@ -368,19 +713,133 @@ impl<'a> Runner<'a> {
             l_max: objective.planner_at(best.progress).l_max,
             stopped,
             breakdown,
+            stream: evaluation.stream,
+            planner: objective.planner_at(best.progress),
+            robust_reachability: robust,
+            robust_cost,
+            recheck_s,
         };
         self.write_results(&summary, &report, &history)?;
         Ok(summary)
     }
 
+    /// Refuses a checkpoint that does not belong to the scenario: another file, or the same
+    /// file edited since the run started. The error says what changed.
+    fn check_binding(&self, c: &Checkpoint, hash: &str, shape: &ScenarioShape) -> Result<()> {
+        let scenario = self.scenario_path.display();
+        if let Some(was) = &c.scenario_shape {
+            if let Some(d) = was.difference(shape) {
+                return Err(Error::invalid(
+                    "scenario",
+                    &scenario,
+                    format!("does not match the checkpoint: {d}; --resume needs the scenario the run started with"),
+                ));
+            }
+        }
+        match &c.scenario_hash {
+            Some(was) if was != hash => Err(Error::invalid(
+                "scenario",
+                &scenario,
+                format!("has changed since the checkpoint: its contents hash {hash}, the checkpoint's {was}; --resume needs the scenario the run started with"),
+            )),
+            Some(_) => Ok(()),
+            None => {
+                eprintln!(
+                    "warning: {}: the checkpoint records no scenario hash (an older version wrote it); {scenario} is not checked against it",
+                    self.out.join(files::CHECKPOINT).display()
+                );
+                Ok(())
+            }
+        }
+    }
+
+    /// Re-checks the best distinct final candidates with `recheck_seeds` fresh planner seeds
+    /// and returns the one whose cost is lowest with its lowest re-checked `R` (ties: higher
+    /// mean `R`, then lower cost in the run), with its figures. Without a re-check, `best`.
+    fn recheck(
+        &self,
+        objective: &Objective,
+        optimizer: &dyn Optimizer,
+        best: Evaluated,
+    ) -> Result<(Evaluated, Option<RobustReachability>)> {
+        use rayon::prelude::*;
+        let k = self.options.recheck_seeds;
+        if k == 0 {
+            return Ok((best, None));
+        }
+        let space = objective.space();
+        let mut pool: Vec<&Evaluated> = optimizer.candidates();
+        pool.push(&best);
+        pool.sort_by(|a, b| a.cost.total_cmp(&b.cost).then(a.stream.cmp(&b.stream)));
+        let mut chosen: Vec<(Evaluated, Design)> = Vec::new();
+        for e in pool {
+            let design = space.try_decode(&e.x)?;
+            if chosen.iter().all(|(_, d)| *d != design) {
+                chosen.push((e.clone(), design));
+                if chosen.len() == RECHECK_CANDIDATES {
+                    break;
+                }
+            }
+        }
+        let jobs: Vec<(usize, u64)> = (0..chosen.len())
+            .flat_map(|c| (0..k as u64).map(move |j| (c, j)))
+            .collect();
+        let values: Vec<f64> = jobs
+            .par_iter()
+            .map(|&(c, j)| {
+                let e = &chosen[c].0;
+                objective
+                    .plan_once(&e.x, RECHECK_STREAM + j, e.progress)
+                    .0
+                    .reachability
+            })
+            .collect();
+        let weights = objective.weights();
+        let mut pick: Option<(f64, f64, usize)> = None;
+        let mut figures = Vec::with_capacity(chosen.len());
+        for (c, (e, design)) in chosen.iter().enumerate() {
+            let v = &values[c * k..(c + 1) * k];
+            let min = v.iter().copied().fold(f64::INFINITY, f64::min);
+            let max = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            let mean = v.iter().sum::<f64>() / k as f64;
+            let robust_cost = super::objective::breakdown(design, min, weights).cost;
+            let better = match pick {
+                None => true,
+                Some((cost, m, p)) => {
+                    robust_cost < cost
+                        || (robust_cost == cost
+                            && (mean > m || (mean == m && e.cost < chosen[p].0.cost)))
+                }
+            };
+            if better {
+                pick = Some((robust_cost, mean, c));
+            }
+            figures.push(RobustReachability {
+                seeds: k,
+                first_stream: RECHECK_STREAM,
+                min,
+                mean,
+                max,
+                values: v.to_vec(),
+                candidates: chosen.len(),
+            });
+        }
+        let (_, _, c) = pick.ok_or_else(|| Error::invalid("recheck", 0, "no candidate"))?;
+        let robust = figures.swap_remove(c);
+        Ok((chosen.swap_remove(c).0, Some(robust)))
+    }
+
     fn write_checkpoint(
         &self,
         optimizer: &dyn Optimizer,
-        generation: u64,
-        evaluations: u64,
-        elapsed_s: f64,
-        stale: usize,
+        Counters {
+            generation,
+            evaluations,
+            elapsed_s,
+            stale,
+        }: Counters,
         history: &[HistoryRow],
+        (hash, shape): (&str, &ScenarioShape),
     ) -> Result<()> {
         let c = Checkpoint {
             scenario: self.scenario_path.clone(),
@@ -392,6 +851,8 @@ impl<'a> Runner<'a> {
             stale,
             history: history.to_vec(),
             state: optimizer.save(),
+            scenario_hash: Some(hash.to_string()),
+            scenario_shape: Some(shape.clone()),
         };
         let json = serde_json::to_string(&c).expect("a checkpoint serialises");
         write_atomic(&self.out.join(files::CHECKPOINT), json.as_bytes())

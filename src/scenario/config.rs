@@ -83,6 +83,13 @@ pub struct OptimizerConfig {
     pub evaluations: Option<u64>,
     /// Seconds between checkpoints. Default 10.
     pub checkpoint_interval: f64,
+    /// Fresh planner seeds the best distinct final candidates are re-checked with before a
+    /// run ends; the result is the candidate whose cost is lowest with its lowest `R` over
+    /// them (0: no re-check). Default 8.
+    pub recheck_seeds: usize,
+    /// Extra planner runs, on their own random streams, that confirm every `R = 1` an
+    /// evaluation claims during the run; the first that falls short sets `R`. Default 2.
+    pub confirm_seeds: usize,
     /// GA settings.
     pub ga: GaParams,
     /// PSO settings (`swarm` is taken from `population`).
@@ -100,6 +107,8 @@ impl Default for OptimizerConfig {
             time_limit: Some(60.0),
             evaluations: None,
             checkpoint_interval: 10.0,
+            recheck_seeds: 8,
+            confirm_seeds: 2,
             ga: GaParams::default(),
             pso: PsoParams::default(),
             asa: AsaParams::default(),

@@ -220,6 +220,14 @@ impl Scenario {
         if let Some(n) = o.evaluations {
             check(n > 0, "optimizer.evaluations", n, "must be at least 1")?;
         }
+        check_non_negative(o.checkpoint_interval, "optimizer.checkpoint_interval")?;
+        for (field, n) in [
+            ("optimizer.recheck_seeds", o.recheck_seeds),
+            ("optimizer.confirm_seeds", o.confirm_seeds),
+        ] {
+            let max = crate::optimize::runner::MAX_SEEDS;
+            check(n <= max, field, n, &format!("must be at most {max}"))?;
+        }
         let r = &spec.robot;
         for (k, &[a, b]) in r.allowed_collisions.iter().enumerate() {
             for v in [a, b] {

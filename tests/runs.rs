@@ -1,0 +1,544 @@
+//! Runs that never silently lose or mislead, through the command line: a checkpoint bound to
+//! its scenario, the output-directory lock, budgets on resume, help texts, replayable and
+//! re-checked reachability, and results independent of the thread count.
+
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+const BIN: &str = env!("CARGO_BIN_EXE_kinsynth");
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn paper_2d() -> PathBuf {
+    root().join("examples/scenarios/paper-2d.toml")
+}
+
+/// A copy of paper-2d in `dir`, to edit.
+fn scenario_copy(dir: &Path) -> PathBuf {
+    let p = dir.join("scenario.toml");
+    std::fs::copy(paper_2d(), &p).unwrap();
+    p
+}
+
+fn optimize(scenario: &Path, out: &Path, extra: &[&str]) -> Command {
+    let mut c = Command::new(BIN);
+    c.arg("optimize")
+        .arg(scenario)
+        .args(["--seed", "3", "--quiet", "--out"])
+        .arg(out)
+        .args(extra);
+    c
+}
+
+fn resume(dir: &Path, extra: &[&str]) -> Output {
+    Command::new(BIN)
+        .args(["optimize", "--quiet", "--resume"])
+        .arg(dir)
+        .args(extra)
+        .output()
+        .unwrap()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn ok(o: &Output) {
+    assert!(o.status.success(), "{}", stderr(o));
+}
+
+/// A failure with exit code 1 (not a panic's 101) and a one-line error containing `needles`.
+fn one_line_error(o: &Output, needles: &[&str]) {
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(o));
+    let e = stderr(o);
+    let lines: Vec<&str> = e.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert_eq!(lines.len(), 1, "one line: {e}");
+    assert!(lines[0].starts_with("error: "), "{e}");
+    for n in needles {
+        assert!(lines[0].contains(n), "`{n}` missing from: {e}");
+    }
+}
+
+fn json(p: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+}
+
+/// best.json without the wall-clock field.
+fn best_without_time(dir: &Path) -> serde_json::Value {
+    let mut v = json(&dir.join("best.json"));
+    v.as_object_mut().unwrap().remove("elapsed_s");
+    v
+}
+
+fn generations_in_checkpoint(dir: &Path) -> u64 {
+    std::fs::read_to_string(dir.join("checkpoint.json"))
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+        .and_then(|v| v["generation"].as_u64())
+        .unwrap_or(0)
+}
+
+fn wait_for_checkpoint(dir: &Path) {
+    let start = Instant::now();
+    while generations_in_checkpoint(dir) < 1 {
+        assert!(start.elapsed() < Duration::from_secs(120), "no checkpoint");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
+fn spawn_long_run(scenario: &Path, out: &Path) -> Child {
+    optimize(
+        scenario,
+        out,
+        &["--time-limit", "600", "--checkpoint-interval", "0"],
+    )
+    .stdout(Stdio::null())
+    .stderr(Stdio::null())
+    .spawn()
+    .unwrap()
+}
+
+#[test]
+fn resume_refuses_an_edited_or_another_scenario_saying_what_changed() {
+    let dir = tempfile::tempdir().unwrap();
+    let scenario = scenario_copy(dir.path());
+    let out = dir.path().join("run");
+    ok(&optimize(
+        &scenario,
+        &out,
+        &["--evaluations", "32", "--recheck-seeds", "1"],
+    )
+    .output()
+    .unwrap());
+    let best = std::fs::read(out.join("best.json")).unwrap();
+    let original = std::fs::read_to_string(&scenario).unwrap();
+
+    // Fewer links: the design space shrinks.
+    std::fs::write(&scenario, original.replace("links = 8", "links = 6")).unwrap();
+    one_line_error(
+        &resume(&out, &[]),
+        &["checkpoint.json", "robot.links was 8, now 6", "--resume"],
+    );
+    // A wider bound: same size, another variable.
+    std::fs::write(
+        &scenario,
+        original.replace("a = [0.0, 0.25]", "a = [0.0, 0.3]"),
+    )
+    .unwrap();
+    one_line_error(
+        &resume(&out, &[]),
+        &["free variable 0 was link1.a in [0, 0.25], now link1.a in [0, 0.3]"],
+    );
+    // Any other edit changes the contents hash.
+    std::fs::write(
+        &scenario,
+        original.replace("clearance = 0.01", "clearance = 0.02"),
+    )
+    .unwrap();
+    one_line_error(
+        &resume(&out, &[]),
+        &["has changed since the checkpoint", "fnv1a64:"],
+    );
+    // Another scenario given explicitly.
+    let other = root().join("examples/scenarios/paper-3d.toml");
+    let o = Command::new(BIN)
+        .arg("optimize")
+        .arg(&other)
+        .args(["--quiet", "--resume"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    one_line_error(&o, &["does not match the checkpoint"]);
+    assert_eq!(
+        std::fs::read(out.join("best.json")).unwrap(),
+        best,
+        "a refused resume writes nothing"
+    );
+    // The scenario as it was resumes.
+    std::fs::write(&scenario, &original).unwrap();
+    ok(&resume(&out, &[]));
+}
+
+#[test]
+fn a_checkpoint_state_of_the_wrong_length_is_an_error_not_a_panic() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    ok(&optimize(
+        &paper_2d(),
+        &out,
+        &["--evaluations", "32", "--recheck-seeds", "1"],
+    )
+    .output()
+    .unwrap());
+    let path = out.join("checkpoint.json");
+    let mut c = json(&path);
+    // As an older checkpoint without the binding, with one value too few in an individual.
+    let o = c.as_object_mut().unwrap();
+    o.remove("scenario_hash");
+    o.remove("scenario_shape");
+    c["state"]["population"][3]["x"]
+        .as_array_mut()
+        .unwrap()
+        .pop();
+    std::fs::write(&path, serde_json::to_string(&c).unwrap()).unwrap();
+    let o = resume(&out, &[]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(e.contains("records no scenario hash"), "{e}");
+    assert!(
+        e.contains("state.population[3].x has 7 values, the design space 8"),
+        "{e}"
+    );
+    assert!(!e.contains("panicked"), "{e}");
+    // Planner settings out of their domain are refused too.
+    ok(&optimize(
+        &paper_2d(),
+        &out,
+        &["--evaluations", "32", "--recheck-seeds", "1"],
+    )
+    .output()
+    .unwrap());
+    let mut c = json(&path);
+    c["planner"]["l_max"] = serde_json::json!(-1.0);
+    std::fs::write(&path, serde_json::to_string(&c).unwrap()).unwrap();
+    one_line_error(
+        &resume(&out, &[]),
+        &["checkpoint.json", "planner.l_max = -1"],
+    );
+}
+
+#[test]
+fn a_second_run_on_the_same_directory_is_refused_naming_the_first() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("busy");
+    let mut first = spawn_long_run(&paper_2d(), &out);
+    wait_for_checkpoint(&out);
+    let lock = out.join(".kinsynth.lock");
+    assert!(lock.exists());
+    let pid = format!("pid {}", first.id());
+    let o = optimize(&paper_2d(), &out, &["--evaluations", "32"])
+        .output()
+        .unwrap();
+    one_line_error(&o, &["busy", "in use by", &pid, "kinsynth", "optimize"]);
+    let o = resume(&out, &[]);
+    one_line_error(&o, &["in use by", &pid]);
+    // The first run goes on, and its Ctrl-C path releases the lock.
+    assert!(
+        first.try_wait().unwrap().is_none(),
+        "the first run is unharmed"
+    );
+    let status = Command::new("kill")
+        .args(["-INT", &first.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    assert!(first.wait().unwrap().success());
+    assert!(!lock.exists(), "the lock file is removed at exit");
+    assert_eq!(json(&out.join("best.json"))["stopped"], "interrupted");
+}
+
+#[test]
+fn a_killed_run_leaves_a_stale_lock_that_is_taken_over_and_its_temporary_files_removed() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("killed");
+    let mut child = spawn_long_run(&paper_2d(), &out);
+    wait_for_checkpoint(&out);
+    let pid = child.id();
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let lock = out.join(".kinsynth.lock");
+    assert!(lock.exists(), "kill -9 leaves the lock file");
+    std::fs::create_dir_all(out.join("trajectories")).unwrap();
+    for f in [".kinsynth-a1b2.tmp", "trajectories/.kinsynth-c3d4.tmp"] {
+        std::fs::write(out.join(f), "half").unwrap();
+    }
+    let o = resume(&out, &["--time-limit", "0", "--recheck-seeds", "1"]);
+    ok(&o);
+    let e = stderr(&o);
+    assert!(
+        e.contains(&format!("taking over the lock of pid {pid}")),
+        "{e}"
+    );
+    assert!(e.contains("removed 2 temporary file(s)"), "{e}");
+    assert!(!out.join(".kinsynth-a1b2.tmp").exists());
+    assert!(!out.join("trajectories/.kinsynth-c3d4.tmp").exists());
+    assert!(!lock.exists());
+}
+
+#[test]
+fn bad_budgets_are_refused_naming_the_flag_and_the_value() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("never");
+    for (flag, value, reason) in [
+        (
+            "--time-limit",
+            "-1",
+            "must be a finite, non-negative number of seconds",
+        ),
+        (
+            "--time-limit",
+            "nan",
+            "must be a finite, non-negative number of seconds",
+        ),
+        (
+            "--time-limit",
+            "inf",
+            "must be a finite, non-negative number of seconds",
+        ),
+        (
+            "--checkpoint-interval",
+            "-5",
+            "must be a finite, non-negative",
+        ),
+        ("--lmax", "-1", "must be positive and finite"),
+        ("--lmax", "inf", "must be positive and finite"),
+        (
+            "--recheck-seeds",
+            "100000",
+            "must be a whole number from 0 to 1000",
+        ),
+        (
+            "--recheck-seeds",
+            "-1",
+            "must be a whole number from 0 to 1000",
+        ),
+        ("--evaluations", "-1", "must be a whole number from 1 to"),
+        ("--evaluations", "0", "must be a whole number from 1 to"),
+        ("--evaluations", "2.5", "must be a whole number from 1 to"),
+        ("--evaluations", "nan", "must be a whole number from 1 to"),
+    ] {
+        let o = optimize(&paper_2d(), &out, &[flag, value])
+            .output()
+            .unwrap();
+        let shown = value.replace("nan", "NaN");
+        one_line_error(&o, &[&format!("{flag} = {shown}"), reason]);
+    }
+    assert!(!out.exists(), "nothing is written for a refused run");
+    let o = Command::new(BIN)
+        .arg("reach")
+        .arg(paper_2d())
+        .args(["--lmax", "-0.5"])
+        .output()
+        .unwrap();
+    one_line_error(&o, &["--lmax = -0.5"]);
+}
+
+#[test]
+fn resume_with_a_larger_budget_extends_the_run_to_the_uninterrupted_result() {
+    let dir = tempfile::tempdir().unwrap();
+    let whole = dir.path().join("whole");
+    let recheck = ["--recheck-seeds", "2"];
+    ok(&optimize(
+        &paper_2d(),
+        &whole,
+        &[&recheck[..], &["--evaluations", "150"]].concat(),
+    )
+    .output()
+    .unwrap());
+    let short = dir.path().join("short");
+    ok(&optimize(
+        &paper_2d(),
+        &short,
+        &[&recheck[..], &["--evaluations", "60"]].concat(),
+    )
+    .output()
+    .unwrap());
+    assert_eq!(json(&short.join("best.json"))["evaluations"], 62);
+    ok(&resume(&short, &["--evaluations", "150"]));
+    assert_eq!(json(&short.join("best.json"))["evaluations"], 152);
+    assert_eq!(best_without_time(&short), best_without_time(&whole));
+    // A time limit given on resume is a new total: a spent one ends the run at once.
+    let o = resume(&short, &["--time-limit", "0", "--evaluations", "1000"]);
+    ok(&o);
+    assert_eq!(
+        json(&short.join("best.json"))["stopped"],
+        "time limit reached"
+    );
+}
+
+#[test]
+fn every_help_lists_the_files_its_command_writes() {
+    let help = |cmd: &str| {
+        let o = Command::new(BIN).args([cmd, "--help"]).output().unwrap();
+        ok(&o);
+        stdout(&o)
+    };
+    let h = help("optimize");
+    for f in [
+        "best.json",
+        "history.csv",
+        "reach.json",
+        "convergence.svg",
+        "robot.urdf",
+        "trajectories/",
+        "checkpoint.json",
+        ".kinsynth.lock",
+    ] {
+        assert!(h.contains(f), "optimize --help lacks {f}");
+    }
+    let h = help("experiment");
+    for f in [
+        "runs.csv",
+        "curves.csv",
+        "curves.svg",
+        "scenario.toml",
+        "method{k}",
+    ] {
+        assert!(h.contains(f), "experiment --help lacks {f}");
+    }
+    let h = help("reach");
+    for f in ["--json FILE", "task_{i}.csv", "task_{i}.json", "--seeds"] {
+        assert!(h.contains(f), "reach --help lacks {f}");
+    }
+    for cmd in ["urdf", "scenario"] {
+        assert!(help(cmd).contains("Writes the file given by -o"), "{cmd}");
+    }
+    for cmd in ["check", "edges"] {
+        assert!(
+            help(cmd).to_lowercase().contains("writes no files"),
+            "{cmd}"
+        );
+    }
+}
+
+#[test]
+fn best_json_replays_its_evaluation_and_records_the_recheck() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let o = optimize(
+        &paper_2d(),
+        &out,
+        &["--evaluations", "96", "--recheck-seeds", "3"],
+    )
+    .output()
+    .unwrap();
+    ok(&o);
+    assert!(
+        stdout(&o).contains("re-checked with 3 seeds"),
+        "{}",
+        stdout(&o)
+    );
+    let best = json(&out.join("best.json"));
+    let robust = &best["robust_reachability"];
+    assert_eq!(robust["seeds"], 3);
+    let values: Vec<f64> = robust["values"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    assert_eq!(values.len(), 3);
+    let min = values.iter().copied().fold(f64::INFINITY, f64::min);
+    assert_eq!(robust["min"].as_f64().unwrap(), min);
+    assert!(robust["candidates"].as_u64().unwrap() >= 1);
+    assert!(best["robust_cost"].as_f64().unwrap() >= best["cost"].as_f64().unwrap() - 1e-12);
+    assert!(best["stream"].as_u64().is_some());
+    assert_eq!(best["planner"]["checker"], "segment");
+
+    // reach without --seed replays the producing evaluation: same R and paths as reach.json.
+    let replay = dir.path().join("replay.json");
+    let o = Command::new(BIN)
+        .arg("reach")
+        .arg(paper_2d())
+        .arg("--design")
+        .arg(out.join("best.json"))
+        .arg("--json")
+        .arg(&replay)
+        .output()
+        .unwrap();
+    ok(&o);
+    assert!(
+        stdout(&o).contains("replaying the evaluation"),
+        "{}",
+        stdout(&o)
+    );
+    let (a, b) = (json(&replay), json(&out.join("reach.json")));
+    assert_eq!(a["reachability"], best["reachability"]);
+    assert_eq!(a["stream"], best["stream"]);
+    assert_eq!(a["targets"], b["targets"]);
+    assert_eq!(a["nodes"], b["nodes"]);
+}
+
+#[test]
+fn reach_reports_the_spread_of_r_over_seeds() {
+    // A design that reaches task 9 only at the edge of the goal tolerance: R = 1 for one seed
+    // of 0-9 only.
+    let design = root().join("tests/fixtures/edge-of-tolerance.json");
+    let dir = tempfile::tempdir().unwrap();
+    let report = dir.path().join("spread.json");
+    let o = Command::new(BIN)
+        .arg("reach")
+        .arg(paper_2d())
+        .arg("--design")
+        .arg(&design)
+        .args(["--seeds", "10", "--seed", "0", "--json"])
+        .arg(&report)
+        .output()
+        .unwrap();
+    ok(&o);
+    assert!(
+        stdout(&o).contains("R over 10 seeds (0–9): min 0.900, mean 0.910, max 1.000"),
+        "{}",
+        stdout(&o)
+    );
+    let v = json(&report);
+    let spread = &v["spread"];
+    assert_eq!(spread["seeds"].as_array().unwrap().len(), 10);
+    assert_eq!(spread["min"], 0.9);
+    assert_eq!(spread["max"], 1.0);
+    assert!((spread["mean"].as_f64().unwrap() - 0.91).abs() < 1e-12);
+    assert_eq!(v["seed"], 0, "the report is the first seed's");
+    let o = Command::new(BIN)
+        .arg("reach")
+        .arg(paper_2d())
+        .args(["--seeds", "0"])
+        .output()
+        .unwrap();
+    one_line_error(&o, &["--seeds = 0"]);
+}
+
+#[test]
+fn one_seed_fixes_the_result_whatever_the_thread_count() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut bests = Vec::new();
+    for threads in ["1", "2"] {
+        let out = dir.path().join(format!("threads{threads}"));
+        ok(&optimize(
+            &paper_2d(),
+            &out,
+            &["--evaluations", "96", "--recheck-seeds", "4"],
+        )
+        .env("RAYON_NUM_THREADS", threads)
+        .output()
+        .unwrap());
+        bests.push(best_without_time(&out));
+    }
+    assert_eq!(bests[0], bests[1]);
+}
+
+#[test]
+fn confirmation_runs_keep_a_lucky_planner_run_from_scoring_r_1() {
+    use kinsynth::optimize::Objective;
+    let s = kinsynth::Scenario::load(&paper_2d()).unwrap();
+    let design =
+        kinsynth::Design::load(&root().join("tests/fixtures/edge-of-tolerance.json")).unwrap();
+    let x = s.space.encode(&design);
+    assert_eq!(s.space.decode(&x), design);
+    // Planner seed 5, stream 0 is the one run of seeds 0-9 that reaches every task.
+    let lucky = Objective::new(&s, s.planner.clone(), 5);
+    assert_eq!(lucky.plan_once(&x, 0, 0.0).0.reachability, 1.0);
+    let e = Objective::new(&s, s.planner.clone(), 5)
+        .with_confirmation(2)
+        .evaluate_confirmed(&x, 0, 0.0);
+    assert_eq!(e.breakdown.reachability, 0.9);
+    assert!(e.planner_runs >= 2);
+    assert_ne!(e.stream, 0, "the run that fell short is the one to replay");
+    assert_eq!(lucky.plan_once(&x, e.stream, 0.0).0, e.report);
+}
