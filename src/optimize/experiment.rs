@@ -24,8 +24,9 @@ pub struct Method {
     pub l_max: f64,
 }
 
-/// The methods of an experiment: §IV-A compares GA, PSO and ASA with `segment` at π/4 and the
-/// ASA + `discrete` π/40 baseline; §IV-B runs GA with `segment` at π/4.
+/// The methods of an experiment: §IV-A compares GA, PSO and ASA with `certified` (the
+/// default, proven-safe checker) at π/4, GA with the paper's `segment` fast path at π/4, and the
+/// ASA + `discrete` π/40 baseline; §IV-B runs GA with `certified` at π/4.
 pub fn methods(preset: Preset) -> Vec<Method> {
     use std::f64::consts::PI;
     let m = |label: &str, algorithm, checker, l_max| Method {
@@ -34,23 +35,15 @@ pub fn methods(preset: Preset) -> Vec<Method> {
         checker,
         l_max,
     };
+    let certified = CheckerKind::Certified;
     match preset {
         Preset::Paper2d => vec![
+            m("GA certified pi/4", Algorithm::Ga, certified, PI / 4.0),
+            m("PSO certified pi/4", Algorithm::Pso, certified, PI / 4.0),
+            m("ASA certified pi/4", Algorithm::Asa, certified, PI / 4.0),
             m(
                 "GA segment pi/4",
                 Algorithm::Ga,
-                CheckerKind::Segment,
-                PI / 4.0,
-            ),
-            m(
-                "PSO segment pi/4",
-                Algorithm::Pso,
-                CheckerKind::Segment,
-                PI / 4.0,
-            ),
-            m(
-                "ASA segment pi/4",
-                Algorithm::Asa,
                 CheckerKind::Segment,
                 PI / 4.0,
             ),
@@ -61,12 +54,7 @@ pub fn methods(preset: Preset) -> Vec<Method> {
                 PI / 40.0,
             ),
         ],
-        Preset::Paper3d => vec![m(
-            "GA segment pi/4",
-            Algorithm::Ga,
-            CheckerKind::Segment,
-            PI / 4.0,
-        )],
+        Preset::Paper3d => vec![m("GA certified pi/4", Algorithm::Ga, certified, PI / 4.0)],
     }
 }
 
