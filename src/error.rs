@@ -90,6 +90,28 @@ pub enum Error {
     },
 }
 
+/// A number for messages: as Rust writes it for ordinary magnitudes (`0.25`, `-3`), in exponent
+/// form for very large or very small ones (`1e308` rather than 309 digits).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Num(pub f64);
+
+impl std::fmt::Display for Num {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let v = self.0;
+        if v.is_finite() && v != 0.0 && !(1e-5..1e16).contains(&v.abs()) {
+            write!(f, "{v:e}")
+        } else {
+            write!(f, "{v}")
+        }
+    }
+}
+
+/// Numbers as `[a, b, …]`, each written as [`Num`].
+pub fn fmt_list(values: &[f64]) -> String {
+    let parts: Vec<String> = values.iter().map(|&v| Num(v).to_string()).collect();
+    format!("[{}]", parts.join(", "))
+}
+
 impl Error {
     /// An [`Error::InvalidValue`] from displayable parts.
     pub fn invalid(
