@@ -588,3 +588,20 @@ fn file(name: &str, text: &[u8]) -> (tempfile::TempDir, PathBuf) {
     std::fs::write(&p, text).unwrap();
     (dir, p)
 }
+
+/// urdf-rs reports a vector with a line break inside as a message over two lines.
+#[test]
+fn regression_urdf_vector_split_by_a_line_break_gives_one_line() {
+    let (_dir, p) = file(
+        "robot.urdf",
+        b"<robot name=\"r\"><link name=\"a\"/><link name=\"b\"/>\
+          <joint name=\"j\" type=\"revolute\"><parent link=\"a\"/><child link=\"b\"/>\
+          <origin xyz=\"0 -0.08 -0.0000\n00054\"/><axis xyz=\"0 0 1\"/>\
+          <limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/></joint></robot>",
+    );
+    let e = kinsynth::import::load_chain(&p, None, None, None, 4)
+        .unwrap_err()
+        .to_string();
+    assert_one_line("urdf", 0, "regression", &e, &p);
+    assert!(e.contains("expected 3 found 4"), "{e}");
+}

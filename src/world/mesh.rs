@@ -102,7 +102,7 @@ pub enum MeshError {
         extension: Option<String>,
     },
     /// The file could not be parsed.
-    #[error("{}: cannot parse as {format}: {message}", .path.display())]
+    #[error("{}: cannot parse as {format}: {}", .path.display(), crate::error::one_line(.message))]
     Parse {
         /// The file.
         path: PathBuf,
