@@ -9,6 +9,19 @@ use parry3d_f64::math::Pose;
 use parry3d_f64::query;
 use parry3d_f64::shape::{Segment, SharedShape};
 
+/// Mesh files larger than this (32 MiB, about 650,000 binary STL triangles: a second or more
+/// to read and convert) show a spinner on stderr while they load, when stderr is a terminal.
+pub const MESH_PROGRESS_BYTES: u64 = 32 << 20;
+
+/// Clears a progress display when dropped, on success and on error alike.
+struct ClearOnDrop<'a>(&'a indicatif::ProgressBar);
+
+impl Drop for ClearOnDrop<'_> {
+    fn drop(&mut self) {
+        self.0.finish_and_clear();
+    }
+}
+
 /// How a mesh obstacle stands in for collision checking.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -160,10 +173,32 @@ impl ObstacleShape {
                 representation,
                 scale,
             } => {
+                // Large meshes take a second or more to read and convert: show a spinner on
+                // stderr (drawn only when it is a terminal).
+                let bar = std::fs::metadata(file)
+                    .is_ok_and(|m| m.len() > MESH_PROGRESS_BYTES)
+                    .then(|| {
+                        let bar = indicatif::ProgressBar::with_draw_target(
+                            None,
+                            indicatif::ProgressDrawTarget::stderr(),
+                        );
+                        bar.set_message(format!("reading mesh {}", file.display()));
+                        bar.enable_steady_tick(std::time::Duration::from_millis(100));
+                        bar
+                    });
+                let _clear = bar.as_ref().map(ClearOnDrop);
                 let mut mesh = load_mesh(file).map_err(|source| Error::Mesh {
                     field: "file".into(),
                     source,
                 })?;
+                if let Some(bar) = &bar {
+                    bar.set_message(format!(
+                        "building the {} of {} ({} triangles)",
+                        representation.name(),
+                        file.display(),
+                        mesh.triangles.len()
+                    ));
+                }
                 let bad = |reason: String| Error::invalid("file", file.display(), reason);
                 for (i, v) in mesh.vertices.iter_mut().enumerate() {
                     for (c, s) in v.iter_mut().zip(scale) {
