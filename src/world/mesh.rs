@@ -497,7 +497,7 @@ pub fn support_polytope(points: &[Vector], planes: usize) -> Option<Vec<Vector>>
     }
     let centre = (min + max) * 0.5;
     let diagonal = (max - min).length();
-    if !(diagonal > 0.0) {
+    if diagonal.is_nan() || diagonal <= 0.0 {
         return None;
     }
     let mut directions: Vec<Vector> = sphere_directions(planes)
@@ -560,12 +560,12 @@ pub fn support_polytope(points: &[Vector], planes: usize) -> Option<Vec<Vector>>
         let [a, b, c] = f.map(|i| dv[i as usize]);
         let n = (b - a).cross(c - a);
         let len = n.length();
-        if !(len > 0.0) {
+        if len.is_nan() || len <= 0.0 {
             continue;
         }
         let n = n / len;
         let offset = n.dot(a).abs();
-        if !(offset > 0.0) {
+        if offset.is_nan() || offset <= 0.0 {
             return None;
         }
         vertices.push(centre + n / offset);
