@@ -635,4 +635,13 @@ mod tests {
         assert_eq!(poly, vec![p(0.0, 0.0), p(1.0, 0.0), p(1.0, 1.0)]);
         assert!(find_polyline(&segs, p(0.0, 0.0), p(2.0, 0.0)).is_none());
     }
+
+    /// Many coincident collision segments used to make the search try every order of them
+    /// (30! here): it now gives up after a bounded number of steps.
+    #[test]
+    fn polyline_search_of_coincident_segments_is_bounded() {
+        let o = Point3::origin();
+        let segs = vec![[o, o]; 30];
+        assert!(find_polyline(&segs, o, Point3::new(1.0, 0.0, 0.0)).is_none());
+    }
 }

@@ -138,8 +138,8 @@ impl ObstacleShape {
                 } else {
                     Err(Error::invalid(
                         "size",
-                        fmt_list(&size),
-                        format!("every side must be positive, finite and at most {MAX_LENGTH} m"),
+                        format!("{size:?}"),
+                        format!("every side must be positive and finite, at most {MAX_LENGTH} m"),
                     ))
                 }
             }
@@ -153,8 +153,8 @@ impl ObstacleShape {
                 } else {
                     Err(Error::invalid(
                         "scale",
-                        fmt_list(&scale),
-                        format!("every factor must be positive, finite and at most {MAX_SETTING}"),
+                        format!("{scale:?}"),
+                        format!("every factor must be positive and finite, at most {MAX_SETTING}"),
                     ))
                 }
             }
