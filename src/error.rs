@@ -32,7 +32,7 @@ pub enum Error {
     },
     /// A file is not well-formed: syntax, an unknown key, a missing key or a value of the wrong
     /// type. The message names the field path and, where known, the line.
-    #[error("{}: {message}", file.display())]
+    #[error("{}: {}", file.display(), one_line(message))]
     Parse {
         /// The file.
         file: PathBuf,
@@ -40,7 +40,7 @@ pub enum Error {
         message: String,
     },
     /// A value is out of its domain (a negative radius, `min > max`, a NaN, …).
-    #[error("{field} = {value}: {reason}")]
+    #[error("{field} = {}: {}", one_line(value), one_line(reason))]
     InvalidValue {
         /// Field path, e.g. `obstacle[3].radius`.
         field: String,
@@ -72,7 +72,7 @@ pub enum Error {
     },
     /// A URDF robot cannot be used as a serial chain: an unsupported joint type, a branch or a
     /// cycle between base and tip, a missing frame, a bad limit.
-    #[error("{element}: {reason}")]
+    #[error("{element}: {}", one_line(reason))]
     Urdf {
         /// The joint or link concerned, e.g. `joint 'elbow' (parent 'upper_arm', child 'forearm')`.
         element: String,
@@ -88,6 +88,43 @@ pub enum Error {
         #[source]
         source: Box<Error>,
     },
+}
+
+/// `text` on one line: every run of line breaks (and the spaces around them) becomes one space,
+/// so that a parser's multi-line message, or a value quoted from the input, keeps every error
+/// on a single line.
+pub fn one_line(text: &str) -> std::borrow::Cow<'_, str> {
+    if !text.contains(['\n', '\r']) {
+        return std::borrow::Cow::Borrowed(text);
+    }
+    let parts: Vec<&str> = text
+        .split(['\n', '\r'])
+        .map(str::trim)
+        .filter(|p| !p.is_empty())
+        .collect();
+    std::borrow::Cow::Owned(parts.join(" "))
+}
+
+/// A number for messages: as Rust writes it for ordinary magnitudes (`0.25`, `-3`), in exponent
+/// form for very large or very small ones (`1e308` rather than 309 digits).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Num(pub f64);
+
+impl std::fmt::Display for Num {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let v = self.0;
+        if v.is_finite() && v != 0.0 && !(1e-5..1e16).contains(&v.abs()) {
+            write!(f, "{v:e}")
+        } else {
+            write!(f, "{v}")
+        }
+    }
+}
+
+/// Numbers as `[a, b, …]`, each written as [`Num`].
+pub fn fmt_list(values: &[f64]) -> String {
+    let parts: Vec<String> = values.iter().map(|&v| Num(v).to_string()).collect();
+    format!("[{}]", parts.join(", "))
 }
 
 impl Error {

@@ -8,6 +8,7 @@ pub mod export;
 pub mod import;
 pub mod io;
 pub mod kinematics;
+pub mod limits;
 pub mod optimize;
 pub mod planning;
 pub mod scenario;

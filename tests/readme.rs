@@ -71,3 +71,57 @@ fn setup_commands_are_the_ones_ci_runs() {
         .join(scenario)
         .exists());
 }
+
+/// The README's "Limits" table gives the figures of `kinsynth::limits`.
+#[test]
+fn limits_table_matches_the_constants() {
+    use kinsynth::limits::*;
+    let text = readme();
+    let grouped = |n: usize| {
+        let digits = n.to_string();
+        let mut out = String::new();
+        for (i, c) in digits.chars().enumerate() {
+            if i > 0 && (digits.len() - i) % 3 == 0 {
+                out.push(',');
+            }
+            out.push(c);
+        }
+        out
+    };
+    let mib = |b: u64| format!("{} MiB", b >> 20);
+    for row in [
+        format!("| file size | {} | scenario TOML", mib(MAX_TEXT_FILE_BYTES)),
+        format!(
+            "| file size | {} | `checkpoint.json`",
+            mib(MAX_CHECKPOINT_BYTES)
+        ),
+        format!("| file size | {} | mesh files", mib(MAX_MESH_FILE_BYTES)),
+        format!("| XML nesting depth | {} |", MAX_XML_DEPTH),
+        format!("| links | {} |", MAX_LINKS),
+        format!(
+            "| point colliders per link | {} |",
+            grouped(MAX_COLLIDERS_PER_LINK)
+        ),
+        format!("| tasks | {} |", grouped(MAX_TASKS)),
+        format!("| obstacles | {} |", grouped(MAX_OBSTACLES)),
+        format!("per mesh file | {} |", grouped(MAX_MESH_TRIANGLES)),
+        format!(
+            "| mesh triangles per scenario | {} |",
+            grouped(MAX_SCENE_MESH_TRIANGLES)
+        ),
+        format!(
+            "| lengths and coordinates | ±{} m |",
+            grouped(MAX_LENGTH as usize)
+        ),
+        format!("| angles | ±{} rad |", grouped(MAX_ANGLE as usize)),
+        format!("| RRT iterations | {} |", grouped(MAX_ITERATIONS)),
+        format!("| IK steps | {} |", grouped(MAX_IK_STEPS)),
+        format!(
+            "| population, GA tournament, ASA batch | {} |",
+            grouped(MAX_POPULATION)
+        ),
+        format!("| other real settings | {:e} |", MAX_SETTING),
+    ] {
+        assert!(text.contains(&row), "README lacks `{row}`");
+    }
+}

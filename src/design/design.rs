@@ -1,7 +1,8 @@
 //! A concrete design: DH geometry, axis ranges and body size of every link (paper Eq. 19–21).
 
-use crate::error::{Error, Result};
+use crate::error::{fmt_list, Error, Num, Result};
 use crate::kinematics::{Axis, Chain, Dh, Link, Placement, Range};
+use crate::limits::{within, MAX_ANGLE, MAX_COLLIDERS_PER_LINK, MAX_LENGTH, MAX_LINKS};
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 use std::path::Path;
 
@@ -13,17 +14,41 @@ pub struct AxisRanges(pub [Range; 6]);
 #[derive(Serialize, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 struct AxisRangesFile {
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "crate::limits::exact::option"
+    )]
     rx: Option<[f64; 2]>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "crate::limits::exact::option"
+    )]
     ry: Option<[f64; 2]>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "crate::limits::exact::option"
+    )]
     rz: Option<[f64; 2]>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "crate::limits::exact::option"
+    )]
     tx: Option<[f64; 2]>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "crate::limits::exact::option"
+    )]
     ty: Option<[f64; 2]>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "crate::limits::exact::option"
+    )]
     tz: Option<[f64; 2]>,
 }
 
@@ -167,8 +192,11 @@ impl Design {
         self.links.iter().map(LinkDesign::joint_count).sum()
     }
 
-    /// Checks every number: finite values, `min ≤ max`, non-negative radius, at least one link.
-    /// Field paths look like `links[2].axes.ry`.
+    /// Checks every number: finite values within the bounds of [`crate::limits`] (lengths and
+    /// translation limits within ±[`MAX_LENGTH`] m, angles and rotation limits within
+    /// ±[`MAX_ANGLE`] rad), `min ≤ max`, non-negative radius, 1 to [`MAX_LINKS`] links and at
+    /// most [`MAX_COLLIDERS_PER_LINK`] colliders per link. Field paths look like
+    /// `links[2].axes.ry`.
     pub fn validate(&self) -> Result<()> {
         if self.links.is_empty() {
             return Err(Error::invalid(
@@ -177,49 +205,73 @@ impl Design {
                 "a design needs at least one link",
             ));
         }
-        if !(self.link_radius.is_finite() && self.link_radius >= 0.0) {
+        if self.links.len() > MAX_LINKS {
+            return Err(Error::invalid(
+                "links",
+                format!("[{} links]", self.links.len()),
+                format!("a design has at most {MAX_LINKS} links"),
+            ));
+        }
+        if self.colliders_per_link > MAX_COLLIDERS_PER_LINK {
+            return Err(Error::invalid(
+                "colliders_per_link",
+                self.colliders_per_link,
+                format!("must be at most {MAX_COLLIDERS_PER_LINK}"),
+            ));
+        }
+        if !(self.link_radius >= 0.0 && within(self.link_radius, MAX_LENGTH)) {
             return Err(Error::invalid(
                 "link_radius",
-                self.link_radius,
-                "must be finite and not negative",
+                Num(self.link_radius),
+                format!("must be finite, not negative and at most {MAX_LENGTH} m"),
             ));
         }
-        if !self.base.is_finite() {
-            return Err(Error::invalid(
-                "base",
-                format!("{:?}", self.base),
-                "must be finite",
-            ));
+        for (name, v, bound, unit) in [
+            ("position", self.base.position, MAX_LENGTH, "m"),
+            ("rpy", self.base.rpy, MAX_ANGLE, "rad"),
+        ] {
+            if !v.iter().all(|&c| within(c, bound)) {
+                return Err(Error::invalid(
+                    format!("base.{name}"),
+                    fmt_list(&v),
+                    format!("every value must be finite and within ±{bound} {unit}"),
+                ));
+            }
         }
         for (i, l) in self.links.iter().enumerate() {
-            for (name, v) in [
-                ("theta", l.theta),
-                ("d", l.d),
-                ("a", l.a),
-                ("alpha", l.alpha),
+            for (name, v, bound, unit) in [
+                ("theta", l.theta, MAX_ANGLE, "rad"),
+                ("d", l.d, MAX_LENGTH, "m"),
+                ("a", l.a, MAX_LENGTH, "m"),
+                ("alpha", l.alpha, MAX_ANGLE, "rad"),
             ] {
-                if !v.is_finite() {
+                if !within(v, bound) {
                     return Err(Error::invalid(
                         format!("links[{i}].{name}"),
-                        v,
-                        "must be finite",
+                        Num(v),
+                        format!("must be finite and within ±{bound} {unit}"),
                     ));
                 }
             }
             for axis in Axis::ALL {
                 let r = l.axes.get(axis);
                 let field = format!("links[{i}].axes.{axis}");
-                if !(r.min.is_finite() && r.max.is_finite()) {
+                let (bound, unit) = if axis.is_rotation() {
+                    (MAX_ANGLE, "rad")
+                } else {
+                    (MAX_LENGTH, "m")
+                };
+                if !(within(r.min, bound) && within(r.max, bound)) {
                     return Err(Error::invalid(
                         field,
-                        format!("[{}, {}]", r.min, r.max),
-                        "limits must be finite",
+                        fmt_list(&[r.min, r.max]),
+                        format!("limits must be finite and within ±{bound} {unit}"),
                     ));
                 }
                 if r.min > r.max {
                     return Err(Error::invalid(
                         field,
-                        format!("[{}, {}]", r.min, r.max),
+                        fmt_list(&[r.min, r.max]),
                         "min must not exceed max",
                     ));
                 }
@@ -231,10 +283,12 @@ impl Design {
     /// Reads a design JSON file, or the `design` member of an optimiser's `best.json`, and
     /// validates it. Errors name the file.
     pub fn load(path: &Path) -> Result<Design> {
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Read {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = crate::limits::read_text(path, crate::limits::MAX_TEXT_FILE_BYTES).map_err(
+            |source| Error::Read {
+                path: path.to_path_buf(),
+                source,
+            },
+        )?;
         let parse_err = |e: serde_json::Error| Error::Parse {
             file: path.to_path_buf(),
             message: e.to_string(),

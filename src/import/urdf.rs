@@ -30,9 +30,10 @@
 //!
 //! Joint names are the URDF joint names, in the order of the actuation vector.
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Num, Result};
 use crate::export::urdf::{isometry_of, z_to};
 use crate::kinematics::{Axis, Chain, Link, LinkGeometry, Range};
+use crate::limits::{within, MAX_ANGLE, MAX_LENGTH, MAX_LINKS};
 use nalgebra::{IsometryMatrix3, Point3, Translation3, Vector3};
 use std::collections::HashMap;
 use std::f64::consts::PI;
@@ -42,6 +43,9 @@ use std::path::Path;
 pub const DEFAULT_RADIUS: f64 = 0.05;
 /// Distance under which collision segment ends count as joined (m).
 pub const POLYLINE_TOLERANCE: f64 = 1e-9;
+/// Most steps of the search for a body polyline among a link's collision segments; beyond it
+/// the body is the straight segment.
+pub const POLYLINE_SEARCH_STEPS: usize = 10_000;
 
 /// A URDF robot as a chain.
 #[derive(Clone, Debug)]
@@ -74,10 +78,23 @@ fn describe(j: &urdf_rs::Joint) -> String {
 
 /// Reads and parses a URDF file; errors name the file.
 pub fn read_urdf(path: &Path) -> Result<urdf_rs::Robot> {
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Read {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let text =
+        crate::limits::read_text(path, crate::limits::MAX_TEXT_FILE_BYTES).map_err(|source| {
+            Error::Read {
+                path: path.to_path_buf(),
+                source,
+            }
+        })?;
+    let depth = crate::limits::xml_depth(&text, crate::limits::MAX_XML_DEPTH);
+    if depth > crate::limits::MAX_XML_DEPTH {
+        return Err(Error::Parse {
+            file: path.to_path_buf(),
+            message: format!(
+                "XML elements nested more than {} deep (the limit)",
+                crate::limits::MAX_XML_DEPTH
+            ),
+        });
+    }
     urdf_rs::read_from_string(&text).map_err(|e| Error::Parse {
         file: path.to_path_buf(),
         message: format!("not a valid URDF: {e}"),
@@ -123,7 +140,14 @@ fn collision_radius(link: &urdf_rs::Link) -> Option<f64> {
             | urdf_rs::Geometry::Sphere { radius } => Some(radius),
             _ => None,
         })
-        .reduce(f64::max)
+        // A NaN radius wins, so that it is reported.
+        .reduce(|a, b| {
+            if a.is_nan() || b.is_nan() {
+                f64::NAN
+            } else {
+                a.max(b)
+            }
+        })
 }
 
 /// A polyline from `from` to `to` made of `segs` (each used once, either way round), by
@@ -139,10 +163,17 @@ fn find_polyline(
         at: Point3<f64>,
         to: Point3<f64>,
         out: &mut Vec<Point3<f64>>,
+        budget: &mut usize,
     ) -> bool {
         if (at - to).norm() <= POLYLINE_TOLERANCE && out.len() > 1 {
             return true;
         }
+        // Many coincident segments would make the search exponential: give up (the body is
+        // then the straight segment).
+        if *budget == 0 {
+            return false;
+        }
+        *budget -= 1;
         for k in 0..segs.len() {
             if used[k] {
                 continue;
@@ -151,7 +182,7 @@ fn find_polyline(
                 if (segs[k][a] - at).norm() <= POLYLINE_TOLERANCE {
                     used[k] = true;
                     out.push(segs[k][b]);
-                    if walk(segs, used, segs[k][b], to, out) {
+                    if walk(segs, used, segs[k][b], to, out, budget) {
                         return true;
                     }
                     out.pop();
@@ -166,7 +197,8 @@ fn find_polyline(
     }
     let mut used = vec![false; segs.len()];
     let mut out = vec![from];
-    if walk(segs, &mut used, from, to, &mut out) {
+    let mut budget = POLYLINE_SEARCH_STEPS;
+    if walk(segs, &mut used, from, to, &mut out, &mut budget) {
         out[0] = from;
         let last = out.len() - 1;
         out[last] = to;
@@ -230,11 +262,49 @@ fn chain_axis(
     Ok((axis, Some(z_to(&d))))
 }
 
+/// The joint's `<origin>` must be finite, its `xyz` within ±[`MAX_LENGTH`] m and its `rpy`
+/// within ±[`MAX_ANGLE`] rad.
+fn check_origin(j: &urdf_rs::Joint) -> Result<()> {
+    let (xyz, rpy) = (j.origin.xyz.0, j.origin.rpy.0);
+    for (name, v, bound, unit) in [
+        ("xyz", xyz, MAX_LENGTH, "m"),
+        ("rpy", rpy, MAX_ANGLE, "rad"),
+    ] {
+        if !v.iter().all(|&c| within(c, bound)) {
+            return Err(urdf_err(
+                describe(j),
+                format!(
+                    "<origin {name}=\"{} {} {}\">: every value must be finite and within ±{bound} {unit}",
+                    Num(v[0]),
+                    Num(v[1]),
+                    Num(v[2])
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 fn joint_range(j: &urdf_rs::Joint) -> Result<Range> {
     if j.joint_type == urdf_rs::JointType::Continuous {
         return Ok(Range::new(-PI, PI));
     }
     let (lo, hi) = (j.limit.lower, j.limit.upper);
+    let (bound, unit) = if j.joint_type == urdf_rs::JointType::Prismatic {
+        (MAX_LENGTH, "m")
+    } else {
+        (MAX_ANGLE, "rad")
+    };
+    if lo.is_finite() && hi.is_finite() && lo < hi && !(within(lo, bound) && within(hi, bound)) {
+        return Err(urdf_err(
+            describe(j),
+            format!(
+                "<limit lower=\"{}\" upper=\"{}\">: limits must lie within ±{bound} {unit}",
+                Num(lo),
+                Num(hi)
+            ),
+        ));
+    }
     if !(lo.is_finite() && hi.is_finite() && lo < hi) {
         return Err(urdf_err(
             describe(j),
@@ -391,6 +461,17 @@ pub fn chain_from_urdf(
         if j.mimic.is_some() && j.joint_type != T::Fixed {
             return Err(urdf_err(describe(j), "mimic joints are not supported"));
         }
+        check_origin(j)?;
+    }
+    let moving = path
+        .iter()
+        .filter(|j| j.joint_type != urdf_rs::JointType::Fixed)
+        .count();
+    if moving > MAX_LINKS {
+        return Err(urdf_err(
+            format!("chain '{base}' → '{tip}'"),
+            format!("{moving} moving joints, more than the limit of {MAX_LINKS}"),
+        ));
     }
     // The base frame's pose in the root.
     let mut base_pose = IsometryMatrix3::identity();
@@ -401,6 +482,7 @@ pub fn chain_from_urdf(
             if up.len() > robot.joints.len() {
                 return Err(urdf_err(describe(j), "not a tree: the joints form a cycle"));
             }
+            check_origin(j)?;
             up.push(isometry_of(&j.origin));
             at = &j.parent.link;
         }
@@ -410,20 +492,35 @@ pub fn chain_from_urdf(
     }
     let radius = match radius {
         Some(r) => {
-            if !(r.is_finite() && r >= 0.0) {
+            if !(r >= 0.0 && within(r, MAX_LENGTH)) {
                 return Err(Error::invalid(
                     "radius",
-                    r,
-                    "must be finite and not negative",
+                    Num(r),
+                    format!("must be finite, not negative and at most {MAX_LENGTH} m"),
                 ));
             }
             r
         }
-        None => std::iter::once(base.as_str())
-            .chain(path.iter().map(|j| j.child.link.as_str()))
-            .filter_map(|l| collision_radius(links[l]))
-            .reduce(f64::max)
-            .unwrap_or(DEFAULT_RADIUS),
+        None => {
+            let mut radius: Option<f64> = None;
+            for l in
+                std::iter::once(base.as_str()).chain(path.iter().map(|j| j.child.link.as_str()))
+            {
+                if let Some(r) = collision_radius(links[l]) {
+                    if !(r >= 0.0 && within(r, MAX_LENGTH)) {
+                        return Err(urdf_err(
+                            format!("link '{l}'"),
+                            format!(
+                                "<collision> radius {}: must be finite, not negative and at most {MAX_LENGTH} m",
+                                Num(r)
+                            ),
+                        ));
+                    }
+                    radius = Some(radius.map_or(r, |best| best.max(r)));
+                }
+            }
+            radius.unwrap_or(DEFAULT_RADIUS)
+        }
     };
 
     // Links rigidly attached to the current chain frame, with their poses in it.
@@ -537,5 +634,14 @@ mod tests {
         let poly = find_polyline(&segs, p(0.0, 0.0), p(1.0, 1.0)).unwrap();
         assert_eq!(poly, vec![p(0.0, 0.0), p(1.0, 0.0), p(1.0, 1.0)]);
         assert!(find_polyline(&segs, p(0.0, 0.0), p(2.0, 0.0)).is_none());
+    }
+
+    /// Many coincident collision segments used to make the search try every order of them
+    /// (30! here): it now gives up after a bounded number of steps.
+    #[test]
+    fn polyline_search_of_coincident_segments_is_bounded() {
+        let o = Point3::origin();
+        let segs = vec![[o, o]; 30];
+        assert!(find_polyline(&segs, o, Point3::new(1.0, 0.0, 0.0)).is_none());
     }
 }

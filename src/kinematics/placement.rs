@@ -10,10 +10,10 @@ use serde::{Deserialize, Serialize};
 #[serde(deny_unknown_fields)]
 pub struct Placement {
     /// Position in metres.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "crate::limits::exact::array")]
     pub position: [f64; 3],
     /// Roll, pitch, yaw in radians.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "crate::limits::exact::array")]
     pub rpy: [f64; 3],
 }
 

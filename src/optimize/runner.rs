@@ -521,14 +521,18 @@ impl<'a> Runner<'a> {
     /// Reads `DIR/checkpoint.json`.
     pub fn read_checkpoint(dir: &Path) -> Result<Checkpoint> {
         let path = dir.join(files::CHECKPOINT);
-        let text = std::fs::read_to_string(&path).map_err(|source| Error::Read {
-            path: path.clone(),
-            source,
-        })?;
-        serde_json::from_str(&text).map_err(|e| Error::Parse {
-            file: path,
+        let text = crate::limits::read_text(&path, crate::limits::MAX_CHECKPOINT_BYTES).map_err(
+            |source| Error::Read {
+                path: path.clone(),
+                source,
+            },
+        )?;
+        let c: Checkpoint = serde_json::from_str(&text).map_err(|e| Error::Parse {
+            file: path.clone(),
             message: e.to_string(),
-        })
+        })?;
+        c.planner.validate().map_err(|e| e.in_file(&path))?;
+        Ok(c)
     }
 
     /// Runs until a budget is spent, the run converges (`R = 1` and no improvement for

@@ -2,6 +2,7 @@
 
 use super::schedule::Schedule;
 use crate::collision::{BodyModel, CheckerKind, SelfCollisionConfig};
+use crate::limits::{within, MAX_IK_STEPS, MAX_ITERATIONS, MAX_LENGTH, MAX_SETTING};
 use serde::{Deserialize, Serialize};
 
 /// The `[planner]` section: the RRT that decides reachability (paper §II-D, Eq. 10).
@@ -36,6 +37,73 @@ pub struct PlannerConfig {
     /// Self-collision settings, from the scenario's `[robot]` section (not a `[planner]` key).
     #[serde(skip)]
     pub self_collision: SelfCollisionConfig,
+}
+
+impl PlannerConfig {
+    /// Checks every setting; errors name the field below `planner` and its value. Bounds:
+    /// [`crate::limits`] (`max_iterations` and the schedule's budgets at most
+    /// [`MAX_ITERATIONS`], `ik_steps` at most [`MAX_IK_STEPS`], `goal_tolerance` at most
+    /// [`MAX_LENGTH`], `l_max` and `lambda` at most [`MAX_SETTING`]).
+    pub fn validate(&self) -> crate::Result<()> {
+        let bad = |field: &str, value: &dyn std::fmt::Display, why: String| {
+            Err(crate::Error::invalid(
+                format!("planner.{field}"),
+                value,
+                why,
+            ))
+        };
+        if !(self.l_max > 0.0 && within(self.l_max, MAX_SETTING)) {
+            return bad(
+                "l_max",
+                &crate::error::Num(self.l_max),
+                format!("must be positive and at most {MAX_SETTING}"),
+            );
+        }
+        if !(self.lambda >= 0.0 && within(self.lambda, MAX_SETTING)) {
+            return bad(
+                "lambda",
+                &crate::error::Num(self.lambda),
+                format!("must be finite, not negative and at most {MAX_SETTING}"),
+            );
+        }
+        if !(self.goal_tolerance > 0.0 && within(self.goal_tolerance, MAX_LENGTH)) {
+            return bad(
+                "goal_tolerance",
+                &crate::error::Num(self.goal_tolerance),
+                format!("must be positive and at most {MAX_LENGTH} m"),
+            );
+        }
+        if !(1..=MAX_ITERATIONS).contains(&self.max_iterations) {
+            return bad(
+                "max_iterations",
+                &self.max_iterations,
+                format!("must lie in 1..={MAX_ITERATIONS}"),
+            );
+        }
+        if !(0.0..=1.0).contains(&self.goal_bias) {
+            return bad("goal_bias", &self.goal_bias, "must lie in [0, 1]".into());
+        }
+        if let Some(t) = self.time_limit {
+            if !(t.is_finite() && t > 0.0) {
+                return bad(
+                    "time_limit",
+                    &crate::error::Num(t),
+                    "must be positive and finite".into(),
+                );
+            }
+        }
+        if self.ik_steps > MAX_IK_STEPS {
+            return bad(
+                "ik_steps",
+                &self.ik_steps,
+                format!("must be at most {MAX_IK_STEPS}"),
+            );
+        }
+        if let Some(s) = &self.schedule {
+            s.validate()?;
+        }
+        Ok(())
+    }
 }
 
 impl Default for PlannerConfig {

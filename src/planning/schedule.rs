@@ -9,8 +9,10 @@ use serde::{Deserialize, Serialize};
 #[serde(deny_unknown_fields)]
 pub struct Schedule {
     /// `[start, end]` of `L_max` (radians-and-metres, as the metric of paper Eq. 10).
+    #[serde(deserialize_with = "crate::limits::exact::array")]
     pub l_max: [f64; 2],
     /// `[start, end]` of the RRT iteration budget.
+    #[serde(deserialize_with = "crate::limits::exact::array")]
     pub iterations: [usize; 2],
 }
 
@@ -32,18 +34,27 @@ impl Schedule {
     /// Checks that both `L_max` values are positive and finite and both budgets at least 1;
     /// the error names the field below `planner.schedule`.
     pub fn validate(&self) -> crate::Result<()> {
-        if !self.l_max.iter().all(|v| v.is_finite() && *v > 0.0) {
+        use crate::limits::{within, MAX_ITERATIONS, MAX_SETTING};
+        if !self
+            .l_max
+            .iter()
+            .all(|&v| v > 0.0 && within(v, MAX_SETTING))
+        {
             return Err(crate::Error::invalid(
                 "planner.schedule.l_max",
                 format!("{:?}", self.l_max),
-                "both values must be positive and finite",
+                format!("both values must be positive and at most {MAX_SETTING}"),
             ));
         }
-        if self.iterations.contains(&0) {
+        if !self
+            .iterations
+            .iter()
+            .all(|n| (1..=MAX_ITERATIONS).contains(n))
+        {
             return Err(crate::Error::invalid(
                 "planner.schedule.iterations",
                 format!("{:?}", self.iterations),
-                "both values must be at least 1",
+                format!("both values must lie in 1..={MAX_ITERATIONS}"),
             ));
         }
         Ok(())

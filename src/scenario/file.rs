@@ -207,7 +207,7 @@ pub enum ScaleSpec {
     /// The same factor on every axis.
     Uniform(f64),
     /// One factor per axis.
-    PerAxis([f64; 3]),
+    PerAxis(#[serde(deserialize_with = "crate::limits::exact::array")] [f64; 3]),
 }
 
 impl ScaleSpec {
@@ -230,12 +230,21 @@ pub struct ObstacleSpec {
     /// The shape kind.
     pub shape: ShapeKind,
     /// Position of the shape's centre.
+    #[serde(deserialize_with = "crate::limits::exact::array")]
     pub position: [f64; 3],
     /// Orientation as roll, pitch, yaw (fixed axes x, y, z, as URDF). Default 0.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "crate::limits::exact::option"
+    )]
     pub rpy: Option<[f64; 3]>,
     /// Orientation as a unit quaternion `[x, y, z, w]` (ROS order), instead of `rpy`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "crate::limits::exact::option"
+    )]
     pub quaternion: Option<[f64; 4]>,
     /// Radius (sphere, capsule, cylinder).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -244,7 +253,11 @@ pub struct ObstacleSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub length: Option<f64>,
     /// Full side lengths (cuboid).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "crate::limits::exact::option"
+    )]
     pub size: Option<[f64; 3]>,
     /// Mesh file, relative to the scenario file (mesh).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -265,6 +278,7 @@ pub struct TaskSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub name: Option<String>,
     /// The point the end effector must reach.
+    #[serde(deserialize_with = "crate::limits::exact::array")]
     pub point: [f64; 3],
 }
 

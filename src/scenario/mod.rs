@@ -11,8 +11,12 @@ pub use config::{Algorithm, ObjectiveWeights, OptimizerConfig};
 pub use file::{AxesSpec, AxisSpec, LinkSpec, ObstacleSpec, ParamSpec, ScenarioSpec, ShapeKind};
 
 use crate::design::{AxisRanges, Design, DesignSpace, LinkDesign, Param, Variable};
-use crate::error::{Error, Result};
+use crate::error::{fmt_list, Error, Num, Result};
 use crate::kinematics::{Axis, Placement, Range};
+use crate::limits::{
+    within, MAX_ANGLE, MAX_COLLIDERS_PER_LINK, MAX_LENGTH, MAX_LINKS, MAX_OBSTACLES,
+    MAX_POPULATION, MAX_SCENE_MESH_TRIANGLES, MAX_SETTING, MAX_TASKS,
+};
 use crate::world::{Contact, Obstacle, ObstacleShape, Workspace};
 use nalgebra::Point3;
 use std::path::{Path, PathBuf};
@@ -76,7 +80,7 @@ fn check_positive(v: f64, field: impl Into<String>) -> Result<()> {
     check(
         v.is_finite() && v > 0.0,
         field,
-        v,
+        Num(v),
         "must be positive and finite",
     )
 }
@@ -86,21 +90,93 @@ fn check_non_negative(v: f64, field: impl Into<String>) -> Result<()> {
     check(
         v.is_finite() && v >= 0.0,
         field,
-        v,
+        Num(v),
         "must be finite and not negative",
     )
 }
 
-fn check_param(p: &ParamSpec, field: &str) -> Result<()> {
+/// `v` must be positive, finite and at most `bound` (in `unit`).
+fn check_positive_within(v: f64, bound: f64, unit: &str, field: impl Into<String>) -> Result<()> {
+    check(
+        v > 0.0 && within(v, bound),
+        field,
+        Num(v),
+        &format!("must be positive and at most {bound}{unit}"),
+    )
+}
+
+/// `v` must be finite, not negative and at most `bound` (in `unit`).
+fn check_non_negative_within(
+    v: f64,
+    bound: f64,
+    unit: &str,
+    field: impl Into<String>,
+) -> Result<()> {
+    check(
+        v >= 0.0 && within(v, bound),
+        field,
+        Num(v),
+        &format!("must be finite, not negative and at most {bound}{unit}"),
+    )
+}
+
+/// Every coordinate of `v` must be finite and within `±bound` (in `unit`).
+fn check_vector(v: &[f64], bound: f64, unit: &str, field: impl Into<String>) -> Result<()> {
+    let text = fmt_list(v);
+    check(
+        v.iter().all(|&c| within(c, bound)),
+        field,
+        text,
+        &format!("every value must be finite and within ±{bound}{unit}"),
+    )
+}
+
+/// A count must lie in `min..=max` (`max` is a limit of [`crate::limits`]).
+fn check_count(n: usize, min: usize, max: usize, field: impl Into<String>) -> Result<()> {
+    if n < min {
+        Err(Error::invalid(field, n, format!("must be at least {min}")))
+    } else if n > max {
+        Err(Error::invalid(
+            field,
+            n,
+            format!("must be at most {max} (the limit)"),
+        ))
+    } else {
+        Ok(())
+    }
+}
+
+/// The bound and unit of a design parameter: metres for `a`, `d` and translation limits,
+/// radians for `θ`, `α` and rotation limits.
+fn param_bound(param: Param) -> (f64, &'static str) {
+    let length = match param {
+        Param::D | Param::A => true,
+        Param::Theta | Param::Alpha => false,
+        Param::Min(axis) | Param::Max(axis) => !axis.is_rotation(),
+    };
+    if length {
+        (MAX_LENGTH, " m")
+    } else {
+        (MAX_ANGLE, " rad")
+    }
+}
+
+fn check_param(p: &ParamSpec, param: Param, field: &str) -> Result<()> {
+    let (bound, unit) = param_bound(param);
     match *p {
-        ParamSpec::Fixed(v) => check(v.is_finite(), field, v, "must be finite"),
+        ParamSpec::Fixed(v) => check(
+            within(v, bound),
+            field,
+            Num(v),
+            &format!("must be finite and within ±{bound}{unit}"),
+        ),
         ParamSpec::Free(lo, hi) => {
-            let value = format!("[{lo}, {hi}]");
+            let value = fmt_list(&[lo, hi]);
             check(
-                lo.is_finite() && hi.is_finite(),
+                within(lo, bound) && within(hi, bound),
                 field,
                 &value,
-                "bounds must be finite",
+                &format!("bounds must be finite and within ±{bound}{unit}"),
             )?;
             check(lo <= hi, field, &value, "lower bound exceeds upper bound")
         }
@@ -124,18 +200,16 @@ fn resolve(p: ParamSpec, link: usize, param: Param, vars: &mut Vec<Variable>) ->
     }
 }
 
-fn fmt3(v: [f64; 3]) -> String {
-    format!("[{}, {}, {}]", v[0], v[1], v[2])
-}
-
 impl Scenario {
     /// Reads and validates a scenario file. Every error names the file, and the field path and
     /// value where there is one.
     pub fn load(path: &Path) -> Result<Scenario> {
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Read {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = crate::limits::read_text(path, crate::limits::MAX_TEXT_FILE_BYTES).map_err(
+            |source| Error::Read {
+                path: path.to_path_buf(),
+                source,
+            },
+        )?;
         let spec = Self::parse(&text).map_err(|e| e.in_file(path))?;
         let dir = path.parent().unwrap_or(Path::new(""));
         let mut s = Scenario::from_spec_in(&spec, dir).map_err(|e| e.in_file(path))?;
@@ -185,42 +259,12 @@ impl Scenario {
     pub fn from_spec_in(spec: &ScenarioSpec, dir: &Path) -> Result<Scenario> {
         let space = Self::design_space(spec)?;
         let workspace = Self::workspace(spec, dir)?;
-        let p = &spec.planner;
-        check_positive(p.l_max, "planner.l_max")?;
-        check_non_negative(p.lambda, "planner.lambda")?;
-        check_positive(p.goal_tolerance, "planner.goal_tolerance")?;
-        check(
-            p.max_iterations > 0,
-            "planner.max_iterations",
-            p.max_iterations,
-            "must be at least 1",
-        )?;
-        check(
-            (0.0..=1.0).contains(&p.goal_bias),
-            "planner.goal_bias",
-            p.goal_bias,
-            "must lie in [0, 1]",
-        )?;
-        if let Some(t) = p.time_limit {
-            check_positive(t, "planner.time_limit")?;
-        }
+        spec.planner.validate()?;
         for (i, w) in spec.objective.as_array().into_iter().enumerate() {
-            check_non_negative(w, format!("objective.lambda{i}"))?;
+            check_non_negative_within(w, MAX_SETTING, "", format!("objective.lambda{i}"))?;
         }
+        Self::validate_optimizer(&spec.optimizer)?;
         let o = &spec.optimizer;
-        check(
-            o.population >= 2,
-            "optimizer.population",
-            o.population,
-            "must be at least 2",
-        )?;
-        if let Some(t) = o.time_limit {
-            check_positive(t, "optimizer.time_limit")?;
-        }
-        if let Some(n) = o.evaluations {
-            check(n > 0, "optimizer.evaluations", n, "must be at least 1")?;
-        }
-        check_non_negative(o.checkpoint_interval, "optimizer.checkpoint_interval")?;
         for (field, n) in [
             ("optimizer.recheck_seeds", o.recheck_seeds),
             ("optimizer.confirm_seeds", o.confirm_seeds),
@@ -265,17 +309,106 @@ impl Scenario {
         })
     }
 
+    /// Checks the `[optimizer]` section: budgets, sizes and every parameter of the three
+    /// algorithms, so that no setting can stall, overflow or crash a run.
+    fn validate_optimizer(o: &OptimizerConfig) -> Result<()> {
+        check_count(o.population, 2, MAX_POPULATION, "optimizer.population")?;
+        if let Some(t) = o.time_limit {
+            check_positive(t, "optimizer.time_limit")?;
+        }
+        if let Some(n) = o.evaluations {
+            check(n > 0, "optimizer.evaluations", n, "must be at least 1")?;
+        }
+        check_non_negative(o.checkpoint_interval, "optimizer.checkpoint_interval")?;
+        let ga = &o.ga;
+        check(
+            ga.elites < o.population,
+            "optimizer.ga.elites",
+            ga.elites,
+            &format!(
+                "must be less than the population ({}): a generation needs children",
+                o.population
+            ),
+        )?;
+        check_count(ga.tournament, 1, MAX_POPULATION, "optimizer.ga.tournament")?;
+        let rate = |v: f64, field: &str| {
+            check(
+                (0.0..=1.0).contains(&v),
+                field,
+                v,
+                "must be a probability in [0, 1]",
+            )
+        };
+        rate(ga.crossover_rate, "optimizer.ga.crossover_rate")?;
+        if let Some(v) = ga.mutation_rate {
+            rate(v, "optimizer.ga.mutation_rate")?;
+        }
+        if let Some(v) = ga.zero_rate {
+            rate(v, "optimizer.ga.zero_rate")?;
+        }
+        check_non_negative_within(
+            ga.eta_crossover,
+            MAX_SETTING,
+            "",
+            "optimizer.ga.eta_crossover",
+        )?;
+        check_non_negative_within(
+            ga.eta_mutation,
+            MAX_SETTING,
+            "",
+            "optimizer.ga.eta_mutation",
+        )?;
+        let pso = &o.pso;
+        for (v, name) in [
+            (pso.inertia, "inertia"),
+            (pso.inertia_end, "inertia_end"),
+            (pso.cognitive, "cognitive"),
+            (pso.social, "social"),
+            (pso.max_velocity, "max_velocity"),
+        ] {
+            check_non_negative_within(v, MAX_SETTING, "", format!("optimizer.pso.{name}"))?;
+        }
+        let asa = &o.asa;
+        check_count(asa.batch, 1, MAX_POPULATION, "optimizer.asa.batch")?;
+        check_positive_within(
+            asa.initial_temperature,
+            MAX_SETTING,
+            "",
+            "optimizer.asa.initial_temperature",
+        )?;
+        check(
+            asa.temperature_ratio > 0.0 && asa.temperature_ratio <= 1.0,
+            "optimizer.asa.temperature_ratio",
+            asa.temperature_ratio,
+            "must lie in (0, 1]",
+        )?;
+        check(
+            asa.expected_evaluations > 0,
+            "optimizer.asa.expected_evaluations",
+            asa.expected_evaluations,
+            "must be at least 1",
+        )?;
+        check(
+            asa.reanneal_interval > 0,
+            "optimizer.asa.reanneal_interval",
+            asa.reanneal_interval,
+            "must be at least 1",
+        )
+    }
+
     fn design_space(spec: &ScenarioSpec) -> Result<DesignSpace> {
         let r = &spec.robot;
-        check(r.links >= 1, "robot.links", r.links, "must be at least 1")?;
-        check_non_negative(r.link_radius, "robot.link_radius")?;
-        check_non_negative(r.snap, "robot.snap")?;
-        check(
-            r.base.is_finite(),
-            "robot.base",
-            format!("{:?}", r.base),
-            "must be finite",
+        check_count(r.links, 1, MAX_LINKS, "robot.links")?;
+        check_count(
+            r.colliders_per_link,
+            0,
+            MAX_COLLIDERS_PER_LINK,
+            "robot.colliders_per_link",
         )?;
+        check_non_negative_within(r.link_radius, MAX_LENGTH, " m", "robot.link_radius")?;
+        check_non_negative_within(r.snap, MAX_LENGTH, "", "robot.snap")?;
+        check_vector(&r.base.position, MAX_LENGTH, " m", "robot.base.position")?;
+        check_vector(&r.base.rpy, MAX_ANGLE, " rad", "robot.base.rpy")?;
         check(
             r.uniform.index.is_none(),
             "robot.uniform.index",
@@ -330,7 +463,7 @@ impl Scenario {
             ];
             let mut values = [0.0; 4];
             for ((param, (p, field)), value) in params.into_iter().zip(&specs).zip(&mut values) {
-                check_param(p, field)?;
+                check_param(p, param, field)?;
                 *value = resolve(*p, i + 1, param, &mut vars);
             }
             [link.theta, link.d, link.a, link.alpha] = values;
@@ -345,8 +478,8 @@ impl Scenario {
                         None => continue,
                     },
                 };
-                check_param(&spec.min, &format!("{field}.min"))?;
-                check_param(&spec.max, &format!("{field}.max"))?;
+                check_param(&spec.min, Param::Min(axis), &format!("{field}.min"))?;
+                check_param(&spec.max, Param::Max(axis), &format!("{field}.max"))?;
                 let mut range = Range::ZERO;
                 for (p, param, slot) in [
                     (spec.min, Param::Min(axis), &mut range.min),
@@ -358,7 +491,7 @@ impl Scenario {
                     check(
                         lo <= hi,
                         &field,
-                        format!("{{ min = {lo}, max = {hi} }}"),
+                        format!("{{ min = {}, max = {} }}", Num(lo), Num(hi)),
                         "min must not exceed max",
                     )?;
                 }
@@ -385,19 +518,28 @@ impl Scenario {
     }
 
     fn workspace(spec: &ScenarioSpec, dir: &Path) -> Result<Workspace> {
-        check_non_negative(spec.clearance, "clearance")?;
+        check_non_negative_within(spec.clearance, MAX_LENGTH, " m", "clearance")?;
+        check_count(spec.obstacle.len(), 0, MAX_OBSTACLES, "obstacle")?;
+        check_count(spec.task.len(), 0, MAX_TASKS, "task")?;
         let mut obstacles = Vec::with_capacity(spec.obstacle.len());
+        let mut mesh_triangles = 0usize;
         for (k, o) in spec.obstacle.iter().enumerate() {
-            obstacles.push(Self::obstacle(k, o, dir)?);
+            let obstacle = Self::obstacle(k, o, dir)?;
+            mesh_triangles += obstacle.mesh_triangles();
+            check(
+                mesh_triangles <= MAX_SCENE_MESH_TRIANGLES,
+                format!("obstacle[{k}].file"),
+                o.file.as_deref().unwrap_or(""),
+                &format!(
+                    "the mesh obstacles up to here have {mesh_triangles} triangles, more than \
+                     the limit of {MAX_SCENE_MESH_TRIANGLES} for a scenario"
+                ),
+            )?;
+            obstacles.push(obstacle);
         }
         let mut tasks = Vec::with_capacity(spec.task.len());
         for (j, t) in spec.task.iter().enumerate() {
-            check(
-                t.point.iter().all(|v| v.is_finite()),
-                format!("task[{j}].point"),
-                fmt3(t.point),
-                "must be finite",
-            )?;
+            check_vector(&t.point, MAX_LENGTH, " m", format!("task[{j}].point"))?;
             tasks.push(Point3::from(t.point));
         }
         Workspace::new(obstacles, tasks, spec.clearance)
@@ -406,19 +548,9 @@ impl Scenario {
     fn obstacle(k: usize, o: &ObstacleSpec, dir: &Path) -> Result<Obstacle> {
         let prefix = format!("obstacle[{k}]");
         let field = |f: &str| format!("{prefix}.{f}");
-        check(
-            o.position.iter().all(|v| v.is_finite()),
-            field("position"),
-            fmt3(o.position),
-            "must be finite",
-        )?;
+        check_vector(&o.position, MAX_LENGTH, " m", field("position"))?;
         let rpy = o.rpy.unwrap_or_default();
-        check(
-            rpy.iter().all(|v| v.is_finite()),
-            field("rpy"),
-            fmt3(rpy),
-            "must be finite",
-        )?;
+        check_vector(&rpy, MAX_ANGLE, " rad", field("rpy"))?;
         let kind = match o.shape {
             ShapeKind::Sphere => "sphere",
             ShapeKind::Capsule => "capsule",
@@ -497,7 +629,7 @@ impl Scenario {
             )?;
             let n = q.iter().map(|v| v * v).sum::<f64>().sqrt();
             check(
-                q.iter().all(|v| v.is_finite()) && n > 1e-9,
+                q.iter().all(|v| v.is_finite()) && n.is_finite() && n > 1e-9,
                 field("quaternion"),
                 format!("{q:?}"),
                 "must be finite and non-zero ([x, y, z, w])",

@@ -102,7 +102,7 @@ pub enum MeshError {
         extension: Option<String>,
     },
     /// The file could not be parsed.
-    #[error("{}: cannot parse as {format}: {message}", .path.display())]
+    #[error("{}: cannot parse as {format}: {}", .path.display(), crate::error::one_line(.message))]
     Parse {
         /// The file.
         path: PathBuf,
@@ -348,9 +348,25 @@ impl MeshData {
     /// build the hull. If all vertices are coplanar the hull is a flat
     /// polygon (two-sided), which still works for distance and intersection
     /// queries but has no inside.
+    ///
+    /// Large meshes are reduced first without changing the hull ([`hull_candidates`]):
+    /// duplicate vertices are merged and vertices strictly inside the polytope spanned by the
+    /// extreme vertices in 26 directions are dropped. When more than [`EXACT_HULL_POINTS`]
+    /// candidates remain (a finely tessellated smooth surface, whose exact hull has hundreds
+    /// of thousands of vertices and takes minutes), the result is instead the intersection of
+    /// the [`SUPPORT_PLANES`] supporting half-spaces of the vertices in evenly spread
+    /// directions ([`support_polytope`]): it contains every vertex, so it is conservative for
+    /// collision checking, and is within 0.4 % of the mesh size of the exact hull. A mesh of
+    /// a million triangles takes well under a second either way (`benches/hull.rs`).
     pub fn to_convex_hull(&self) -> Option<SharedShape> {
         self.validate().ok()?;
-        SharedShape::convex_hull(&self.parry_vertices())
+        let points = hull_candidates(&self.vertices);
+        if points.len() > EXACT_HULL_POINTS {
+            if let Some(vertices) = support_polytope(&points, SUPPORT_PLANES) {
+                return SharedShape::convex_hull(&vertices);
+            }
+        }
+        SharedShape::convex_hull(&points)
     }
 
     /// An approximate convex decomposition of the mesh (V-HACD), as a parry
@@ -390,6 +406,264 @@ impl MeshData {
             .map(|&v| Vector::from_array(v))
             .collect()
     }
+}
+
+/// Most candidate points for which [`MeshData::to_convex_hull`] computes the exact hull;
+/// beyond, it builds the [`support_polytope`].
+pub const EXACT_HULL_POINTS: usize = 20_000;
+
+/// Number of supporting half-spaces of the [`support_polytope`] of a large mesh.
+pub const SUPPORT_PLANES: usize = 1024;
+
+/// `n` unit directions spread evenly over the sphere (a Fibonacci lattice).
+fn sphere_directions(n: usize) -> Vec<[f64; 3]> {
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    (0..n)
+        .map(|i| {
+            let z = 1.0 - (2.0 * i as f64 + 1.0) / n as f64;
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let phi = golden * i as f64;
+            [r * phi.cos(), r * phi.sin(), z]
+        })
+        .collect()
+}
+
+/// Support values `max_p d·(p − centre)` of `points` in each direction: by chunks of points in
+/// parallel, with the directions' coordinates in separate arrays (they stay in cache and the
+/// inner loop vectorises).
+fn supports(points: &[Vector], centre: Vector, directions: &[Vector]) -> Vec<f64> {
+    use rayon::prelude::*;
+    let dx: Vec<f64> = directions.iter().map(|d| d.x).collect();
+    let dy: Vec<f64> = directions.iter().map(|d| d.y).collect();
+    let dz: Vec<f64> = directions.iter().map(|d| d.z).collect();
+    let none = || vec![f64::NEG_INFINITY; directions.len()];
+    points
+        .par_chunks(4096)
+        .map(|chunk| {
+            let mut h = none();
+            for p in chunk {
+                let q = *p - centre;
+                for (((h, x), y), z) in h.iter_mut().zip(&dx).zip(&dy).zip(&dz) {
+                    let s = x * q.x + y * q.y + z * q.z;
+                    if s > *h {
+                        *h = s;
+                    }
+                }
+            }
+            h
+        })
+        .reduce(none, |mut a, b| {
+            for (x, y) in a.iter_mut().zip(b) {
+                if y > *x {
+                    *x = y;
+                }
+            }
+            a
+        })
+}
+
+/// The distinct points of `points` that are extreme in some of `directions`.
+fn extreme_points(points: &[Vector], directions: &[Vector]) -> Vec<Vector> {
+    let mut best = vec![(f64::NEG_INFINITY, 0usize); directions.len()];
+    for (i, p) in points.iter().enumerate() {
+        for (d, b) in directions.iter().zip(best.iter_mut()) {
+            let s = d.dot(*p);
+            if s > b.0 {
+                *b = (s, i);
+            }
+        }
+    }
+    let mut idx: Vec<usize> = best.iter().map(|b| b.1).collect();
+    idx.sort_unstable();
+    idx.dedup();
+    idx.into_iter().map(|i| points[i]).collect()
+}
+
+/// The vertices of the polytope `∩_k {x : d_k·x ≤ max_p d_k·p}`: a convex polytope that
+/// contains every point (and so their hull) and touches it in each direction `d_k`. The
+/// directions are `planes` evenly spread unit vectors and the 26 of `{-1, 0, 1}³`, then the
+/// facet normals of the exact hull of the points found extreme in those: the latter make the
+/// flat faces of boxy meshes exact. Computed by polar duality: about the centre of the points'
+/// bounding box, the half-space `d_k·x ≤ h_k` becomes the point `d_k / h_k`, and each facet
+/// `n·y = c` of the hull of those points is the vertex `n / c` of the polytope. `None` when
+/// the points are (nearly) flat, so that the centre is not strictly inside; the caller then
+/// takes the exact hull.
+pub fn support_polytope(points: &[Vector], planes: usize) -> Option<Vec<Vector>> {
+    let first = points.first()?;
+    let (mut min, mut max) = (*first, *first);
+    for p in points {
+        min = min.min(*p);
+        max = max.max(*p);
+    }
+    let centre = (min + max) * 0.5;
+    let diagonal = (max - min).length();
+    if diagonal.is_nan() || diagonal <= 0.0 {
+        return None;
+    }
+    let mut directions: Vec<Vector> = sphere_directions(planes)
+        .into_iter()
+        .map(Vector::from_array)
+        .collect();
+    for x in -1i8..=1 {
+        for y in -1i8..=1 {
+            for z in -1i8..=1 {
+                if (x, y, z) != (0, 0, 0) {
+                    let d = Vector::new(f64::from(x), f64::from(y), f64::from(z));
+                    directions.push(d / d.length());
+                }
+            }
+        }
+    }
+    // The hull of points extreme in the 26 lattice and 128 spread directions lies inside the
+    // true hull; its facets' normals are directions in which the true hull is (nearly) flat.
+    let mut coarse: Vec<Vector> = directions[planes..].to_vec();
+    coarse.extend(sphere_directions(128).into_iter().map(Vector::from_array));
+    let inner = extreme_points(points, &coarse);
+    if let Ok((iv, faces)) = parry3d_f64::transformation::try_convex_hull(&inner) {
+        // The normals of the largest facets first, at most a quarter of `planes` of them (a
+        // box has 6; a round body many small ones, which the spread directions cover).
+        let mut facets: Vec<(f64, Vector)> = faces
+            .iter()
+            .filter_map(|f| {
+                let [a, b, c] = f.map(|i| iv[i as usize]);
+                let n = (b - a).cross(c - a);
+                let len = n.length();
+                (len > 1e-12 * diagonal * diagonal).then(|| (len, n / len))
+            })
+            .collect();
+        facets.sort_by(|x, y| y.0.total_cmp(&x.0));
+        let mut normals: Vec<Vector> = Vec::new();
+        for (_, n) in facets {
+            if normals.len() >= planes / 4 {
+                break;
+            }
+            if !normals.iter().any(|m| m.dot(n) > 1.0 - 1e-12) {
+                normals.push(n);
+            }
+        }
+        directions.extend(normals);
+    }
+    let support = supports(points, centre, &directions);
+    // A margin against rounding keeps every point inside.
+    let margin = 1e-9 * diagonal;
+    if support.iter().any(|&h| h <= 1e-6 * diagonal) {
+        return None;
+    }
+    let dual: Vec<Vector> = directions
+        .iter()
+        .zip(&support)
+        .map(|(d, h)| *d / (h + margin))
+        .collect();
+    let (dv, faces) = parry3d_f64::transformation::try_convex_hull(&dual).ok()?;
+    let mut vertices = Vec::with_capacity(faces.len());
+    for f in &faces {
+        let [a, b, c] = f.map(|i| dv[i as usize]);
+        let n = (b - a).cross(c - a);
+        let len = n.length();
+        if len.is_nan() || len <= 0.0 {
+            continue;
+        }
+        let n = n / len;
+        let offset = n.dot(a).abs();
+        if offset.is_nan() || offset <= 0.0 {
+            return None;
+        }
+        vertices.push(centre + n / offset);
+    }
+    // Numerical trouble (a non-finite vertex) falls back to the exact hull.
+    (vertices.len() >= 4 && vertices.iter().all(|v| v.is_finite())).then_some(vertices)
+}
+
+/// The points that can be vertices of the convex hull of `vertices` (all finite): distinct
+/// positions only, without those strictly inside the polytope spanned by the extreme points in
+/// the 26 directions of `{-1, 0, 1}³ \ {0}` (Akl–Toussaint). Dropping them leaves the hull
+/// unchanged; a small tolerance keeps points on the polytope's faces.
+pub fn hull_candidates(vertices: &[[f64; 3]]) -> Vec<Vector> {
+    let mut points: Vec<[f64; 3]> = vertices.to_vec();
+    points.sort_unstable_by(|a, b| {
+        a[0].total_cmp(&b[0])
+            .then(a[1].total_cmp(&b[1]))
+            .then(a[2].total_cmp(&b[2]))
+    });
+    points.dedup();
+    let all = |points: &[[f64; 3]]| points.iter().map(|&v| Vector::from_array(v)).collect();
+    if points.len() <= 64 {
+        return all(&points);
+    }
+    let mut directions = Vec::with_capacity(26);
+    for x in -1i8..=1 {
+        for y in -1i8..=1 {
+            for z in -1i8..=1 {
+                if (x, y, z) != (0, 0, 0) {
+                    directions.push([f64::from(x), f64::from(y), f64::from(z)]);
+                }
+            }
+        }
+    }
+    let mut extreme = vec![(f64::NEG_INFINITY, 0usize); directions.len()];
+    for (k, p) in points.iter().enumerate() {
+        for (d, e) in directions.iter().zip(extreme.iter_mut()) {
+            let s = dot(*d, *p);
+            if s > e.0 {
+                *e = (s, k);
+            }
+        }
+    }
+    let mut corners: Vec<usize> = extreme.iter().map(|e| e.1).collect();
+    corners.sort_unstable();
+    corners.dedup();
+    let corner_points: Vec<Vector> = corners
+        .iter()
+        .map(|&k| Vector::from_array(points[k]))
+        .collect();
+    let Ok((hv, faces)) = parry3d_f64::transformation::try_convex_hull(&corner_points) else {
+        return all(&points);
+    };
+    if faces.len() < 4 {
+        return all(&points);
+    }
+    let to3 = |v: &Vector| [v.x, v.y, v.z];
+    let centroid = hv.iter().fold([0.0; 3], |c, v| {
+        let v = to3(v);
+        [c[0] + v[0], c[1] + v[1], c[2] + v[2]]
+    });
+    let centroid = centroid.map(|c| c / hv.len() as f64);
+    let (min, max) = MeshData {
+        vertices: points.clone(),
+        triangles: Vec::new(),
+    }
+    .aabb();
+    let diagonal = norm(sub(max, min));
+    let tolerance = 1e-9 * diagonal;
+    // Outward unit normals and offsets of the polytope's faces.
+    let mut planes = Vec::with_capacity(faces.len());
+    for f in &faces {
+        let [a, b, c] = f.map(|i| to3(&hv[i as usize]));
+        let n = cross(sub(b, a), sub(c, a));
+        let len = norm(n);
+        if len <= 1e-12 * diagonal * diagonal {
+            continue;
+        }
+        let mut n = n.map(|v| v / len);
+        let mut offset = dot(n, a);
+        if dot(n, centroid) > offset {
+            n = n.map(|v| -v);
+            offset = -offset;
+        }
+        planes.push((n, offset));
+    }
+    if planes.len() < 4 {
+        return all(&points);
+    }
+    points
+        .iter()
+        .filter(|p| planes.iter().any(|(n, o)| dot(*n, **p) - o > -tolerance))
+        .map(|&v| Vector::from_array(v))
+        .collect()
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
@@ -437,10 +711,13 @@ pub fn load_mesh(path: &Path) -> Result<MeshData, MeshError> {
             })
         }
     };
-    let bytes = std::fs::read(path).map_err(|error| MeshError::Io {
-        path: path.to_path_buf(),
-        error,
-    })?;
+    let bytes =
+        crate::limits::read_file(path, crate::limits::MAX_MESH_FILE_BYTES).map_err(|error| {
+            MeshError::Io {
+                path: path.to_path_buf(),
+                error,
+            }
+        })?;
     let mesh = parse(path, &bytes)?;
     mesh.validate()
         .map_err(|defect| MeshError::from_defect(path, defect))?;
@@ -502,6 +779,15 @@ fn parse_stl(path: &Path, bytes: &[u8]) -> Result<MeshData, MeshError> {
                 };
                 return Err(parse_error(format, message));
             };
+            if count as usize > crate::limits::MAX_MESH_TRIANGLES {
+                return Err(parse_error(
+                    format,
+                    format!(
+                        "the header declares {count} triangles, more than the limit of {}",
+                        crate::limits::MAX_MESH_TRIANGLES
+                    ),
+                ));
+            }
             if (bytes.len() as u64) < expected {
                 return Err(parse_error(
                     format,
@@ -523,7 +809,17 @@ fn parse_stl(path: &Path, bytes: &[u8]) -> Result<MeshData, MeshError> {
         };
 
     let indexed = stl_io::read_stl(&mut Cursor::new(input.as_ref()))
-        .map_err(|e| parse_error(format, e.to_string()))?;
+        .map_err(|e| parse_error(format, e.to_string().replace('\n', " ")))?;
+    if indexed.faces.len() > crate::limits::MAX_MESH_TRIANGLES {
+        return Err(parse_error(
+            format,
+            format!(
+                "{} triangles, more than the limit of {}",
+                indexed.faces.len(),
+                crate::limits::MAX_MESH_TRIANGLES
+            ),
+        ));
+    }
     let vertices = indexed
         .vertices
         .iter()
@@ -575,6 +871,25 @@ fn parse_obj(path: &Path, bytes: &[u8]) -> Result<MeshData, MeshError> {
         format: "OBJ",
         message,
     };
+    // Count triangles and vertices before tobj builds them, so a small file of long polygons
+    // cannot expand into gigabytes.
+    let (mut triangles, mut vertices) = (0usize, 0usize);
+    for line in bytes.split(|&b| b == b'\n') {
+        let mut tokens = line
+            .split(|b| b.is_ascii_whitespace())
+            .filter(|t| !t.is_empty());
+        match tokens.next() {
+            Some(b"f") => triangles += tokens.count().saturating_sub(2),
+            Some(b"v") => vertices += 1,
+            _ => {}
+        }
+    }
+    let limit = crate::limits::MAX_MESH_TRIANGLES;
+    if triangles > limit || vertices > limit {
+        return Err(parse_error(format!(
+            "{triangles} triangles and {vertices} vertices: more than the limit of {limit}"
+        )));
+    }
     // The struct update covers fields that only exist with tobj's optional
     // `merging` and `reordering` features.
     #[allow(clippy::needless_update)]
@@ -1204,6 +1519,103 @@ f -3 -2 -1
             assert!((aabb.mins[k] - min[k]).abs() < 1e-9);
             assert!((aabb.maxs[k] - max[k]).abs() < 1e-9);
         }
+    }
+
+    /// The reduced candidate set spans the same hull as all vertices: same hull vertices, far
+    /// fewer points for clouds with an interior.
+    #[test]
+    fn hull_candidates_keep_the_hull_and_drop_interior_points() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+        let sorted = |mut v: Vec<[f64; 3]>| {
+            v.sort_by(|a, b| a.partial_cmp(b).unwrap());
+            v
+        };
+        let hull_points = |points: &[Vector]| -> Vec<[f64; 3]> {
+            let (v, _) = parry3d_f64::transformation::try_convex_hull(points).unwrap();
+            sorted(v.iter().map(|p| [p.x, p.y, p.z]).collect())
+        };
+        // A cube full of points, and a ball of points with a few on its sphere.
+        let mut cube: Vec<[f64; 3]> = (0..20_000)
+            .map(|_| [rng.random(), rng.random(), rng.random()])
+            .collect();
+        cube.extend(cube.clone()); // duplicates
+        let mut ball: Vec<[f64; 3]> = Vec::new();
+        while ball.len() < 20_000 {
+            let q: [f64; 3] = [rng.random(), rng.random(), rng.random()];
+            let q = q.map(|c| 2.0 * c - 1.0);
+            let n = norm(q);
+            if n <= 1.0 {
+                ball.push(if ball.len() % 50 == 0 {
+                    q.map(|c| c / n)
+                } else {
+                    q
+                });
+            }
+        }
+        for (name, cloud) in [("cube", cube), ("ball", ball)] {
+            let all: Vec<Vector> = cloud.iter().map(|&v| Vector::from_array(v)).collect();
+            let reduced = hull_candidates(&cloud);
+            assert!(
+                reduced.len() * 4 < cloud.len(),
+                "{name}: {} of {} points kept",
+                reduced.len(),
+                cloud.len()
+            );
+            assert_eq!(hull_points(&reduced), hull_points(&all), "{name}");
+        }
+    }
+
+    /// The support polytope of points on a sphere contains them all and stays within 0.4 %
+    /// of the radius of the sphere (the exact hull).
+    #[test]
+    fn support_polytope_contains_the_points_and_stays_close() {
+        let points: Vec<Vector> = sphere_directions(30_000)
+            .into_iter()
+            .map(|d| Vector::from_array(d) * 0.5 + Vector::new(1.0, -2.0, 0.25))
+            .collect();
+        let vertices = support_polytope(&points, SUPPORT_PLANES).unwrap();
+        assert!(vertices.len() <= 4 * SUPPORT_PLANES);
+        let centre = Vector::new(1.0, -2.0, 0.25);
+        let worst = vertices
+            .iter()
+            .map(|v| (*v - centre).length() - 0.5)
+            .fold(0.0, f64::max);
+        assert!(worst > 0.0 && worst < 0.004 * 0.5, "{worst}");
+        let hull = SharedShape::convex_hull(&vertices).unwrap();
+        for p in &points {
+            assert!(hull.contains_point(&Pose::IDENTITY, *p), "{p:?} outside");
+        }
+        // A finely sampled rotated box: its faces come out exact.
+        let rotation = parry3d_f64::math::Rotation::from_axis_angle(
+            Vector::new(1.0, 2.0, 3.0).normalize(),
+            0.4,
+        );
+        let mut boxed = Vec::new();
+        for i in 0..=40 {
+            for j in 0..=40 {
+                let (u, v) = (i as f64 / 40.0 - 0.5, j as f64 / 40.0 - 0.5);
+                for q in [
+                    [u, v, 0.5],
+                    [u, v, -0.5],
+                    [u, 0.5, v],
+                    [u, -0.5, v],
+                    [0.5, u, v],
+                    [-0.5, u, v],
+                ] {
+                    boxed.push(rotation * Vector::from_array(q));
+                }
+            }
+        }
+        let vertices = support_polytope(&boxed, SUPPORT_PLANES).unwrap();
+        let worst = vertices
+            .iter()
+            .map(|v| (rotation.inverse() * *v).abs().max_element() - 0.5)
+            .fold(0.0, f64::max);
+        assert!(worst < 1e-6, "{worst}");
+        // A flat cloud has no interior: no polytope (the exact hull is used).
+        let flat: Vec<Vector> = points.iter().map(|p| Vector::new(p.x, p.y, 0.0)).collect();
+        assert!(support_polytope(&flat, SUPPORT_PLANES).is_none());
     }
 
     #[test]

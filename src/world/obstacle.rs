@@ -2,11 +2,25 @@
 
 use super::convert::{to_parry_point, to_parry_pose};
 use super::mesh::load_mesh;
-use crate::error::{Error, Result};
+use crate::error::{fmt_list, Error, Num, Result};
+use crate::limits::{within, MAX_LENGTH, MAX_SETTING};
 use nalgebra::{IsometryMatrix3, Point3, Rotation3, Vector3};
 use parry3d_f64::math::Pose;
 use parry3d_f64::query;
 use parry3d_f64::shape::{Segment, SharedShape};
+
+/// Mesh files larger than this (32 MiB, about 650,000 binary STL triangles: a second or more
+/// to read and convert) show a spinner on stderr while they load, when stderr is a terminal.
+pub const MESH_PROGRESS_BYTES: u64 = 32 << 20;
+
+/// Clears a progress display when dropped, on success and on error alike.
+struct ClearOnDrop<'a>(&'a indicatif::ProgressBar);
+
+impl Drop for ClearOnDrop<'_> {
+    fn drop(&mut self) {
+        self.0.finish_and_clear();
+    }
+}
 
 /// How a mesh obstacle stands in for collision checking.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
@@ -87,38 +101,45 @@ impl ObstacleShape {
         }
     }
 
-    /// Checks every dimension: finite and positive (a capsule's length may be 0). The error
-    /// names the field (`radius`, `size`, `length`) relative to the obstacle.
+    /// Checks every dimension: finite, positive (a capsule's length may be 0) and at most
+    /// [`MAX_LENGTH`]; mesh scale factors positive and at most [`MAX_SETTING`]. The error
+    /// names the field (`radius`, `size`, `length`, `scale`) relative to the obstacle.
     pub fn validate(&self) -> Result<()> {
         let positive = |field: &str, v: f64| {
-            if v.is_finite() && v > 0.0 {
+            if v > 0.0 && within(v, MAX_LENGTH) {
                 Ok(())
+            } else if v.is_finite() && v > 0.0 {
+                Err(Error::invalid(
+                    field,
+                    Num(v),
+                    format!("must be at most {MAX_LENGTH} m"),
+                ))
             } else {
-                Err(Error::invalid(field, v, "must be positive and finite"))
+                Err(Error::invalid(field, Num(v), "must be positive and finite"))
             }
         };
         match *self {
             ObstacleShape::Sphere { radius } => positive("radius", radius),
             ObstacleShape::Capsule { length, radius } => {
                 positive("radius", radius)?;
-                if length.is_finite() && length >= 0.0 {
+                if length >= 0.0 && within(length, MAX_LENGTH) {
                     Ok(())
                 } else {
                     Err(Error::invalid(
                         "length",
-                        length,
-                        "must be finite and not negative",
+                        Num(length),
+                        format!("must be finite, not negative and at most {MAX_LENGTH} m"),
                     ))
                 }
             }
             ObstacleShape::Cuboid { size } => {
-                if size.iter().all(|v| v.is_finite() && *v > 0.0) {
+                if size.iter().all(|v| *v > 0.0 && within(*v, MAX_LENGTH)) {
                     Ok(())
                 } else {
                     Err(Error::invalid(
                         "size",
                         format!("{size:?}"),
-                        "every side must be positive and finite",
+                        format!("every side must be positive and finite, at most {MAX_LENGTH} m"),
                     ))
                 }
             }
@@ -127,39 +148,71 @@ impl ObstacleShape {
                 positive("length", length)
             }
             ObstacleShape::Mesh { scale, .. } => {
-                if scale.iter().all(|v| v.is_finite() && *v > 0.0) {
+                if scale.iter().all(|v| *v > 0.0 && within(*v, MAX_SETTING)) {
                     Ok(())
                 } else {
                     Err(Error::invalid(
                         "scale",
                         format!("{scale:?}"),
-                        "every factor must be positive and finite",
+                        format!("every factor must be positive and finite, at most {MAX_SETTING}"),
                     ))
                 }
             }
         }
     }
 
-    /// The parry shape and the transform from the obstacle's frame to the shape's own frame
-    /// (parry's cylinders stand along y, ours along z). Loads mesh files.
-    fn parry(&self) -> Result<(SharedShape, IsometryMatrix3<f64>)> {
+    /// The parry shape, the transform from the obstacle's frame to the shape's own frame
+    /// (parry's cylinders stand along y, ours along z) and the number of mesh triangles read.
+    /// Loads mesh files; scaled mesh vertices must lie within [`MAX_LENGTH`] of the mesh origin.
+    fn parry(&self) -> Result<(SharedShape, IsometryMatrix3<f64>, usize)> {
         let id = IsometryMatrix3::identity();
-        Ok(match *self {
+        let mut triangles = 0;
+        let (shape, local) = match *self {
             ObstacleShape::Mesh {
                 ref file,
                 representation,
                 scale,
             } => {
+                // Large meshes take a second or more to read and convert: show a spinner on
+                // stderr (drawn only when it is a terminal).
+                let bar = std::fs::metadata(file)
+                    .is_ok_and(|m| m.len() > MESH_PROGRESS_BYTES)
+                    .then(|| {
+                        let bar = indicatif::ProgressBar::with_draw_target(
+                            None,
+                            indicatif::ProgressDrawTarget::stderr(),
+                        );
+                        bar.set_message(format!("reading mesh {}", file.display()));
+                        bar.enable_steady_tick(std::time::Duration::from_millis(100));
+                        bar
+                    });
+                let _clear = bar.as_ref().map(ClearOnDrop);
                 let mut mesh = load_mesh(file).map_err(|source| Error::Mesh {
                     field: "file".into(),
                     source,
                 })?;
-                for v in &mut mesh.vertices {
+                if let Some(bar) = &bar {
+                    bar.set_message(format!(
+                        "building the {} of {} ({} triangles)",
+                        representation.name(),
+                        file.display(),
+                        mesh.triangles.len()
+                    ));
+                }
+                let bad = |reason: String| Error::invalid("file", file.display(), reason);
+                for (i, v) in mesh.vertices.iter_mut().enumerate() {
                     for (c, s) in v.iter_mut().zip(scale) {
                         *c *= s;
                     }
+                    if !v.iter().all(|&c| within(c, MAX_LENGTH)) {
+                        return Err(bad(format!(
+                            "vertex {i} scaled by {} is {}, more than {MAX_LENGTH} m from the mesh origin",
+                            fmt_list(&scale),
+                            fmt_list(v)
+                        )));
+                    }
                 }
-                let bad = |reason: String| Error::invalid("file", file.display(), reason);
+                triangles = mesh.triangles.len();
                 let shape = match representation {
                     MeshRepresentation::Hull => mesh
                         .to_convex_hull()
@@ -188,7 +241,8 @@ impl ObstacleShape {
                     Rotation3::from_axis_angle(&Vector3::x_axis(), std::f64::consts::FRAC_PI_2),
                 ),
             ),
-        })
+        };
+        Ok((shape, local, triangles))
     }
 }
 
@@ -204,6 +258,7 @@ pub struct Obstacle {
     shape: SharedShape,
     pose: Pose,
     sphere: Option<(Point3<f64>, f64)>,
+    mesh_triangles: usize,
 }
 
 impl Obstacle {
@@ -214,7 +269,7 @@ impl Obstacle {
         placement: IsometryMatrix3<f64>,
     ) -> Result<Self> {
         geometry.validate()?;
-        let (shape, local) = geometry.parry()?;
+        let (shape, local, mesh_triangles) = geometry.parry()?;
         let sphere = match geometry {
             ObstacleShape::Sphere { radius } => {
                 Some((Point3::from(placement.translation.vector), radius))
@@ -228,7 +283,13 @@ impl Obstacle {
             placement,
             shape,
             sphere,
+            mesh_triangles,
         })
+    }
+
+    /// Number of triangles read from the obstacle's mesh file (0 for other shapes).
+    pub fn mesh_triangles(&self) -> usize {
+        self.mesh_triangles
     }
 
     /// A sphere obstacle at `center` (paper Eq. 3).

@@ -1,0 +1,303 @@
+//! Limits on every input, in one place, and the guarded file reader that applies them.
+//!
+//! The figures keep the bundled and realistic scenes far inside them while making sure that no
+//! input file can exhaust memory, block the program or overflow a number to infinity. Each one
+//! is documented in the README's "Limits" section, and exceeding one is a one-line error that
+//! names the file, the field and the value.
+
+use std::fs::File;
+use std::io::{self, Read};
+use std::path::Path;
+
+/// Largest scenario (TOML), design (JSON) or URDF file, in bytes (16 MiB).
+pub const MAX_TEXT_FILE_BYTES: u64 = 16 << 20;
+/// Largest checkpoint file (`checkpoint.json`), in bytes (64 MiB).
+pub const MAX_CHECKPOINT_BYTES: u64 = 64 << 20;
+/// Largest mesh file (STL or OBJ), in bytes (256 MiB: a binary STL of 5M triangles is 250 MB).
+pub const MAX_MESH_FILE_BYTES: u64 = 256 << 20;
+/// Deepest XML element nesting accepted in a URDF file (a URDF needs about 5).
+pub const MAX_XML_DEPTH: usize = 64;
+/// Most links of a chain: `robot.links` of a scenario, `links` of a design, moving joints of a
+/// URDF chain.
+pub const MAX_LINKS: usize = 64;
+/// Most point colliders per link (`colliders_per_link`).
+pub const MAX_COLLIDERS_PER_LINK: usize = 1000;
+/// Most task points of a scenario.
+pub const MAX_TASKS: usize = 10_000;
+/// Most obstacles of a scenario.
+pub const MAX_OBSTACLES: usize = 100_000;
+/// Most triangles of one mesh file.
+pub const MAX_MESH_TRIANGLES: usize = 5_000_000;
+/// Most mesh triangles of all mesh obstacles of a scenario together.
+pub const MAX_SCENE_MESH_TRIANGLES: usize = 20_000_000;
+/// Largest magnitude of a length or coordinate, in metres: DH `a` and `d`, prismatic limits,
+/// positions, task points, radii, sizes, clearance, tolerances and scaled mesh vertices.
+pub const MAX_LENGTH: f64 = 1e3;
+/// Largest magnitude of an angle, in radians: DH `θ` and `α`, revolute limits, `rpy`.
+pub const MAX_ANGLE: f64 = 1e3;
+/// Most RRT iterations per evaluation (`planner.max_iterations`, `planner.schedule`).
+pub const MAX_ITERATIONS: usize = 1_000_000;
+/// Most damped-least-squares steps per extension (`planner.ik_steps`).
+pub const MAX_IK_STEPS: usize = 10_000;
+/// Largest population, swarm or ASA batch (`optimizer.population`, `optimizer.asa.batch`).
+pub const MAX_POPULATION: usize = 10_000;
+/// Largest magnitude of any other real setting (objective weights, optimiser parameters,
+/// `planner.lambda`, mesh scale factors).
+pub const MAX_SETTING: f64 = 1e6;
+
+/// `v` is finite and `|v| ≤ bound`.
+pub fn within(v: f64, bound: f64) -> bool {
+    v.is_finite() && v.abs() <= bound
+}
+
+/// What kind of file system object `meta` describes, for messages.
+fn kind(meta: &std::fs::Metadata) -> &'static str {
+    let t = meta.file_type();
+    if t.is_dir() {
+        return "a directory";
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if t.is_fifo() {
+            return "a FIFO";
+        }
+        if t.is_socket() {
+            return "a socket";
+        }
+        if t.is_char_device() {
+            return "a character device";
+        }
+        if t.is_block_device() {
+            return "a block device";
+        }
+    }
+    "not a regular file"
+}
+
+fn check_regular(meta: &std::fs::Metadata, limit: u64) -> io::Result<()> {
+    if !meta.is_file() {
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!("not a regular file ({})", kind(meta)),
+        ));
+    }
+    if meta.len() > limit {
+        return Err(too_large(meta.len(), limit));
+    }
+    Ok(())
+}
+
+fn too_large(len: u64, limit: u64) -> io::Error {
+    io::Error::new(
+        io::ErrorKind::InvalidData,
+        format!("the file has {len} bytes, more than the limit of {limit} bytes"),
+    )
+}
+
+/// Reads a whole file of at most `limit` bytes. Symbolic links are followed; the target must
+/// be a regular file: devices (`/dev/zero`), FIFOs, sockets and directories are refused before
+/// the file is opened, so nothing blocks. The file is opened non-blocking and checked again
+/// after opening, and never more than `limit` bytes are read, even if it grows meanwhile.
+pub fn read_file(path: &Path, limit: u64) -> io::Result<Vec<u8>> {
+    check_regular(&std::fs::metadata(path)?, limit)?;
+    let mut options = std::fs::OpenOptions::new();
+    options.read(true);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        options.custom_flags(libc::O_NONBLOCK);
+    }
+    let file: File = options.open(path)?;
+    let meta = file.metadata()?;
+    check_regular(&meta, limit)?;
+    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    file.take(limit + 1).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > limit {
+        return Err(too_large(bytes.len() as u64, limit));
+    }
+    Ok(bytes)
+}
+
+/// [`read_file`] as UTF-8 text.
+pub fn read_text(path: &Path, limit: u64) -> io::Result<String> {
+    String::from_utf8(read_file(path, limit)?).map_err(|e| {
+        io::Error::new(
+            io::ErrorKind::InvalidData,
+            format!(
+                "not valid UTF-8 text (at byte {})",
+                e.utf8_error().valid_up_to()
+            ),
+        )
+    })
+}
+
+/// The deepest element nesting of an XML document, found by a scan that needs no recursion
+/// (comments, processing instructions, CDATA sections, declarations and quoted attribute
+/// values are skipped). Stops early and returns a value above `limit` as soon as the nesting
+/// exceeds it. Malformed input is left for the XML parser to report.
+pub fn xml_depth(text: &str, limit: usize) -> usize {
+    let b = text.as_bytes();
+    let mut i = 0;
+    let mut depth = 0usize;
+    let mut deepest = 0usize;
+    let skip_to = |from: usize, end: &[u8]| -> usize {
+        b[from..]
+            .windows(end.len())
+            .position(|w| w == end)
+            .map_or(b.len(), |p| from + p + end.len())
+    };
+    while i < b.len() {
+        if b[i] != b'<' {
+            i += 1;
+            continue;
+        }
+        let rest = &b[i..];
+        if rest.starts_with(b"<!--") {
+            i = skip_to(i + 4, b"-->");
+        } else if rest.starts_with(b"<![CDATA[") {
+            i = skip_to(i + 9, b"]]>");
+        } else if rest.starts_with(b"<?") {
+            i = skip_to(i + 2, b"?>");
+        } else if rest.starts_with(b"<!") {
+            i = skip_to(i + 2, b">");
+        } else if rest.starts_with(b"</") {
+            depth = depth.saturating_sub(1);
+            i = skip_to(i + 2, b">");
+        } else {
+            // A start tag: find its end outside quoted attribute values.
+            let mut j = i + 1;
+            let mut quote = None;
+            let mut self_closing = false;
+            while j < b.len() {
+                let c = b[j];
+                match quote {
+                    Some(q) if c == q => quote = None,
+                    Some(_) => {}
+                    None if c == b'"' || c == b'\'' => quote = Some(c),
+                    None if c == b'>' => {
+                        self_closing = j > i + 1 && b[j - 1] == b'/';
+                        break;
+                    }
+                    None => {}
+                }
+                j += 1;
+            }
+            if !self_closing {
+                depth += 1;
+                deepest = deepest.max(depth);
+                if deepest > limit {
+                    return deepest;
+                }
+            } else {
+                deepest = deepest.max(depth + 1);
+            }
+            i = j + 1;
+        }
+    }
+    deepest
+}
+
+/// Serde helpers for fixed-size arrays that refuse any other number of elements: serde's own
+/// arrays ignore surplus elements in some formats (TOML among them), so a 4-element `position`
+/// would pass. Use as `#[serde(deserialize_with = "crate::limits::exact::array")]`, or
+/// `exact::option` on an optional field with `#[serde(default)]`.
+pub mod exact {
+    use serde::de::{self, Deserialize, Deserializer, IgnoredAny, SeqAccess, Visitor};
+    use std::marker::PhantomData;
+
+    struct ArrayVisitor<T, const N: usize>(PhantomData<T>);
+
+    impl<'de, T: Deserialize<'de> + Copy + Default, const N: usize> Visitor<'de>
+        for ArrayVisitor<T, N>
+    {
+        type Value = [T; N];
+
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            write!(f, "an array of exactly {N} numbers")
+        }
+
+        fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<[T; N], A::Error> {
+            let mut out = [T::default(); N];
+            for (i, slot) in out.iter_mut().enumerate() {
+                *slot = seq
+                    .next_element()?
+                    .ok_or_else(|| de::Error::invalid_length(i, &self))?;
+            }
+            let mut n = N;
+            while seq.next_element::<IgnoredAny>()?.is_some() {
+                n += 1;
+            }
+            if n > N {
+                return Err(de::Error::invalid_length(n, &self));
+            }
+            Ok(out)
+        }
+    }
+
+    /// Deserialises `[T; N]`, refusing arrays of any other length.
+    pub fn array<'de, D, T, const N: usize>(d: D) -> Result<[T; N], D::Error>
+    where
+        D: Deserializer<'de>,
+        T: Deserialize<'de> + Copy + Default,
+    {
+        d.deserialize_seq(ArrayVisitor::<T, N>(PhantomData))
+    }
+
+    /// [`array`] for an optional field (present means `Some`).
+    pub fn option<'de, D, T, const N: usize>(d: D) -> Result<Option<[T; N]>, D::Error>
+    where
+        D: Deserializer<'de>,
+        T: Deserialize<'de> + Copy + Default,
+    {
+        array(d).map(Some)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn xml_depth_counts_nesting_and_skips_comments_and_quotes() {
+        assert_eq!(xml_depth("<a/>", 10), 1);
+        assert_eq!(
+            xml_depth("<?xml version=\"1.0\"?><a><b><c/></b></a>", 10),
+            3
+        );
+        assert_eq!(
+            xml_depth("<a><!-- <b><b><b> --><b x=\"<c>\" y='/>'></b></a>", 10),
+            2
+        );
+        assert_eq!(xml_depth("<a><![CDATA[<b><b>]]></a>", 10), 1);
+        let deep = "<a>".repeat(15_000);
+        assert_eq!(
+            xml_depth(&deep, 64),
+            65,
+            "stops as soon as the limit is passed"
+        );
+    }
+
+    #[test]
+    fn read_file_refuses_devices_directories_and_large_files() {
+        let dir = tempfile::tempdir().unwrap();
+        let e = read_file(dir.path(), 100).unwrap_err().to_string();
+        assert!(e.contains("a directory"), "{e}");
+        let p = dir.path().join("f.txt");
+        std::fs::write(&p, b"0123456789").unwrap();
+        assert_eq!(read_file(&p, 10).unwrap(), b"0123456789");
+        let e = read_file(&p, 9).unwrap_err().to_string();
+        assert!(e.contains("10 bytes") && e.contains("limit of 9"), "{e}");
+        #[cfg(unix)]
+        {
+            let e = read_file(Path::new("/dev/zero"), 100)
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("character device"), "{e}");
+            let link = dir.path().join("zero.stl");
+            std::os::unix::fs::symlink("/dev/zero", &link).unwrap();
+            let e = read_file(&link, 100).unwrap_err().to_string();
+            assert!(e.contains("character device"), "{e}");
+        }
+    }
+}

@@ -1,0 +1,407 @@
+//! Hostile and careless inputs through the command line: devices, FIFOs, huge files, deep XML,
+//! absurd sizes and magnitudes, vectors of the wrong length. Each gets exit code 1 and a
+//! one-line error naming the file, the field and the value: never a panic (exit 101), an
+//! abort, a hang or gigabytes of memory.
+
+use std::ffi::OsStr;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+const BIN: &str = env!("CARGO_BIN_EXE_kinsynth");
+
+fn repo(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
+}
+
+/// Runs the binary (killed after 60 s) and returns its exit code and stderr.
+fn run(args: &[&OsStr]) -> (Option<i32>, String) {
+    let mut child = Command::new(BIN)
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        if start.elapsed() > Duration::from_secs(60) {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("no exit within 60 s: {args:?}");
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    };
+    let mut stderr = String::new();
+    use std::io::Read;
+    child
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut stderr)
+        .unwrap();
+    (status.code(), stderr)
+}
+
+/// The command must fail with exit code 1 and one line `error: …` that contains every part.
+fn rejected(args: &[&OsStr], parts: &[&str]) -> String {
+    let (code, stderr) = run(args);
+    assert_eq!(code, Some(1), "exit code (101 is a panic): {stderr}");
+    assert_eq!(
+        stderr.lines().count(),
+        1,
+        "one-line error expected: {stderr}"
+    );
+    assert!(stderr.starts_with("error: "), "{stderr}");
+    for p in parts {
+        assert!(stderr.contains(p), "`{p}` missing from: {stderr}");
+    }
+    stderr
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+const ROBOT: &str =
+    "[robot]\nlinks = 2\nuniform = { a = [0.0, 0.4], axes = { ry = { min = -3.0, max = 3.0 } } }\n";
+const TASK: &str = "\n[[task]]\npoint = [0.5, 0.0, 0.3]\n";
+
+fn check(path: &Path) -> Vec<&OsStr> {
+    vec!["check".as_ref(), path.as_os_str()]
+}
+
+#[cfg(unix)]
+#[test]
+fn dev_zero_as_any_input_file_is_refused() {
+    let zero = Path::new("/dev/zero");
+    let s = zero.to_str().unwrap();
+    rejected(&check(zero), &[s, "not a regular file", "character device"]);
+    rejected(
+        &[
+            "urdf".as_ref(),
+            zero.as_os_str(),
+            "-o".as_ref(),
+            "x.urdf".as_ref(),
+        ],
+        &[s, "character device"],
+    );
+    let cell = repo("examples/scenarios/ur5-cell.toml");
+    rejected(
+        &[
+            "reach".as_ref(),
+            cell.as_os_str(),
+            "--urdf".as_ref(),
+            zero.as_os_str(),
+        ],
+        &[s, "character device"],
+    );
+    rejected(
+        &[
+            "reach".as_ref(),
+            cell.as_os_str(),
+            "--design".as_ref(),
+            zero.as_os_str(),
+        ],
+        &[s, "character device"],
+    );
+    // A checkpoint that is a link to /dev/zero.
+    let dir = tempfile::tempdir().unwrap();
+    let cp = dir.path().join("checkpoint.json");
+    std::os::unix::fs::symlink(zero, &cp).unwrap();
+    rejected(
+        &[
+            "optimize".as_ref(),
+            "--resume".as_ref(),
+            dir.path().as_os_str(),
+        ],
+        &[cp.to_str().unwrap(), "character device"],
+    );
+}
+
+#[cfg(unix)]
+#[test]
+fn mesh_path_linked_to_dev_zero_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = dir.path().join("zero.stl");
+    std::os::unix::fs::symlink("/dev/zero", &mesh).unwrap();
+    let p = write(
+        dir.path(),
+        "s.toml",
+        &format!(
+            "{ROBOT}\n[[obstacle]]\nshape = \"mesh\"\nfile = \"zero.stl\"\nposition = [2.0, 0.0, 0.0]\n{TASK}"
+        ),
+    );
+    rejected(
+        &check(&p),
+        &["obstacle[0].file", "zero.stl", "character device"],
+    );
+}
+
+#[cfg(unix)]
+#[test]
+fn fifo_as_mesh_or_scenario_does_not_block() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("pipe.stl");
+    let made = Command::new("mkfifo").arg(&fifo).status().unwrap();
+    assert!(made.success());
+    let p = write(
+        dir.path(),
+        "s.toml",
+        &format!(
+            "{ROBOT}\n[[obstacle]]\nshape = \"mesh\"\nfile = \"pipe.stl\"\nposition = [2.0, 0.0, 0.0]\n{TASK}"
+        ),
+    );
+    let start = Instant::now();
+    rejected(&check(&p), &["obstacle[0].file", "pipe.stl", "a FIFO"]);
+    rejected(&check(&fifo), &["pipe.stl", "a FIFO"]);
+    assert!(start.elapsed() < Duration::from_secs(20));
+}
+
+#[test]
+fn directory_as_scenario_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    rejected(&check(dir.path()), &["a directory"]);
+}
+
+#[test]
+fn oversized_scenario_file_is_refused_without_reading_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("big.toml");
+    // A sparse file of 1 GiB: refused by its size, not read.
+    std::fs::File::create(&p).unwrap().set_len(1 << 30).unwrap();
+    rejected(
+        &check(&p),
+        &["big.toml", "1073741824 bytes", "limit of 16777216"],
+    );
+}
+
+#[test]
+fn absurd_link_and_collider_counts_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    for (text, parts) in [
+        (
+            ROBOT.replace("links = 2", "links = 1000000000"),
+            ["robot.links", "1000000000", "at most 64"],
+        ),
+        (
+            ROBOT.replace("links = 2", "links = 10000"),
+            ["robot.links", "10000", "at most 64"],
+        ),
+        (
+            ROBOT.replace("links = 2", "links = 2\ncolliders_per_link = 1000000000"),
+            ["robot.colliders_per_link", "1000000000", "at most 1000"],
+        ),
+    ] {
+        let p = write(dir.path(), "s.toml", &format!("{text}{TASK}"));
+        let mut all = vec![p.to_str().unwrap()];
+        all.extend(parts);
+        rejected(&check(&p), &all);
+    }
+}
+
+#[test]
+fn too_many_tasks_or_obstacles_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let tasks = "\n[[task]]\npoint = [0.5, 0.0, 0.3]\n".repeat(10_001);
+    let p = write(dir.path(), "tasks.toml", &format!("{ROBOT}{tasks}"));
+    rejected(&check(&p), &["tasks.toml", "task = 10001", "at most 10000"]);
+    let obstacles =
+        "\n[[obstacle]]\nshape = \"sphere\"\nposition = [5, 0, 0]\nradius = 0.1\n".repeat(100_001);
+    let p = write(
+        dir.path(),
+        "obst.toml",
+        &format!("{ROBOT}{obstacles}{TASK}"),
+    );
+    rejected(
+        &check(&p),
+        &["obst.toml", "obstacle = 100001", "at most 100000"],
+    );
+}
+
+#[test]
+fn vectors_must_have_exactly_three_elements() {
+    let dir = tempfile::tempdir().unwrap();
+    let sphere = "\n[[obstacle]]\nshape = \"sphere\"\nposition = [2.0, 0.0, 0.0]\nradius = 0.1\n";
+    for (text, field) in [
+        (
+            format!("{ROBOT}{}{TASK}", sphere.replace("[2.0, 0.0, 0.0]", "[2.0, 0.0, 0.0, 7.0]")),
+            "obstacle[0].position",
+        ),
+        (
+            format!("{ROBOT}{sphere}{}", TASK.replace("[0.5, 0.0, 0.3]", "[0.5, 0.0, 0.3, 1.0]")),
+            "task[0].point",
+        ),
+        (
+            format!("{ROBOT}{}{TASK}", sphere.replace("radius = 0.1", "radius = 0.1\nrpy = [0, 0, 0, 0]")),
+            "obstacle[0].rpy",
+        ),
+        (
+            format!(
+                "{ROBOT}\n[[obstacle]]\nshape = \"cuboid\"\nposition = [2, 0, 0]\nsize = [1, 1]\n{TASK}"
+            ),
+            "obstacle[0].size",
+        ),
+        (
+            format!("{}{TASK}", ROBOT.replace("links = 2", "links = 2\nbase = { position = [0, 0, 0, 0] }")),
+            "robot.base.position",
+        ),
+    ] {
+        let p = write(dir.path(), "s.toml", &text);
+        let e = rejected(&check(&p), &[p.to_str().unwrap(), field]);
+        assert!(e.contains("invalid length"), "{e}");
+    }
+    // The same in a design.
+    let d = write(
+        dir.path(),
+        "d.json",
+        r#"{"base": {"position": [0, 0, 0, 1]}, "link_radius": 0.02, "colliders_per_link": 4,
+            "links": [{"a": 0.3, "axes": {"ry": [-1, 1]}}]}"#,
+    );
+    rejected(
+        &[
+            "urdf".as_ref(),
+            d.as_os_str(),
+            "-o".as_ref(),
+            dir.path().join("x.urdf").as_os_str(),
+        ],
+        &["d.json", "base.position", "invalid length"],
+    );
+}
+
+fn design(a: &str, ry: &str, links: usize) -> String {
+    let link = format!(r#"{{"a": {a}, "axes": {{"ry": {ry}}}}}"#);
+    format!(
+        r#"{{"link_radius": 0.02, "colliders_per_link": 4, "links": [{}]}}"#,
+        vec![link; links].join(", ")
+    )
+}
+
+#[test]
+fn huge_design_values_are_refused_naming_field_and_value() {
+    let dir = tempfile::tempdir().unwrap();
+    let cell = repo("examples/scenarios/paper-2d.toml");
+    for (text, parts) in [
+        (
+            design("1e308", "[-1, 1]", 2),
+            vec!["links[0].a", "1e308", "1000 m"],
+        ),
+        (
+            design("0.3", "[-1e308, 1e308]", 2),
+            vec!["links[0].axes.ry", "1e308", "1000 rad"],
+        ),
+        (
+            design("0.3", "[-1, 1]", 10_000),
+            vec!["links", "10000 links", "at most 64"],
+        ),
+    ] {
+        let p = write(dir.path(), "d.json", &text);
+        let mut all = vec![p.to_str().unwrap()];
+        all.extend(parts);
+        rejected(
+            &[
+                "reach".as_ref(),
+                cell.as_os_str(),
+                "--design".as_ref(),
+                p.as_os_str(),
+            ],
+            &all,
+        );
+    }
+}
+
+#[test]
+fn huge_scenario_values_are_refused_naming_field_and_value() {
+    let dir = tempfile::tempdir().unwrap();
+    for (text, parts) in [
+        (
+            ROBOT.replace("[0.0, 0.4]", "[0.0, 1e308]"),
+            vec!["robot.uniform.a", "1e308", "1000 m"],
+        ),
+        (
+            ROBOT.replace("min = -3.0", "min = -1e308"),
+            vec!["robot.uniform.axes.ry.min", "-1e308", "1000 rad"],
+        ),
+    ] {
+        let p = write(dir.path(), "s.toml", &format!("{text}{TASK}"));
+        let mut all = vec![p.to_str().unwrap()];
+        all.extend(parts);
+        rejected(&check(&p), &all);
+    }
+    let p = write(
+        dir.path(),
+        "s.toml",
+        &format!("{ROBOT}\n[planner]\nmax_iterations = 1000000000\n{TASK}"),
+    );
+    rejected(&check(&p), &["planner.max_iterations", "1000000000"]);
+}
+
+#[test]
+fn urdf_joint_limits_of_1e308_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let ur5 = std::fs::read_to_string(repo("examples/robots/ur5.urdf")).unwrap();
+    // The first revolute joint, j1_rz.
+    let text = ur5.replacen("lower=\"-6.283185307179586\"", "lower=\"-1e308\"", 1);
+    assert_ne!(text, ur5);
+    let p = write(dir.path(), "robot.urdf", &text);
+    let cell = repo("examples/scenarios/ur5-cell.toml");
+    rejected(
+        &[
+            "reach".as_ref(),
+            cell.as_os_str(),
+            "--urdf".as_ref(),
+            p.as_os_str(),
+        ],
+        &["robot.urdf", "joint 'j1_rz'", "-1e308", "1000 rad"],
+    );
+}
+
+#[test]
+fn deeply_nested_urdf_is_refused_before_parsing() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = format!(
+        "<robot name=\"r\">{}{}</robot>",
+        "<link name=\"a\">".repeat(15_000),
+        "</link>".repeat(15_000)
+    );
+    let p = write(dir.path(), "deep.urdf", &text);
+    let cell = repo("examples/scenarios/ur5-cell.toml");
+    rejected(
+        &[
+            "reach".as_ref(),
+            cell.as_os_str(),
+            "--urdf".as_ref(),
+            p.as_os_str(),
+        ],
+        &["deep.urdf", "nested more than 64 deep"],
+    );
+}
+
+#[test]
+fn binary_stl_declaring_too_many_triangles_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut bytes = vec![0u8; 80];
+    bytes.extend_from_slice(&u32::MAX.to_le_bytes());
+    std::fs::write(dir.path().join("huge.stl"), &bytes).unwrap();
+    let p = write(
+        dir.path(),
+        "s.toml",
+        &format!(
+            "{ROBOT}\n[[obstacle]]\nshape = \"mesh\"\nfile = \"huge.stl\"\nposition = [2.0, 0.0, 0.0]\n{TASK}"
+        ),
+    );
+    rejected(
+        &check(&p),
+        &[
+            "obstacle[0].file",
+            "huge.stl",
+            "4294967295 triangles",
+            "limit of 5000000",
+        ],
+    );
+}

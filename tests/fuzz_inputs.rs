@@ -1,0 +1,607 @@
+//! Mutation fuzzing of every input kind: scenario TOML, binary and ASCII STL, OBJ, design JSON,
+//! URDF and checkpoint JSON. The bundled files are mutated with a fixed seed (byte flips,
+//! truncation, duplication and deletion of slices, numbers replaced by NaN, infinities, 1e308,
+//! -1, 0 and huge integers) and every mutant is read through the library, in a thread with a
+//! time limit, and a sample through the `kinsynth` binary. Whatever the input, there must be
+//! no panic, no hang and either success or a one-line error naming the file. Inputs that are
+//! accepted are also used (planning, hulls, export), so that nothing downstream panics either.
+//!
+//! A failing case prints its mutations and saves the input under the system's temporary
+//! directory; crash cases found so far are kept as the named regression tests at the end.
+
+use kinsynth::collision::CollisionScene;
+use kinsynth::optimize::runner::Runner;
+use kinsynth::planning::{reachability, PlannerConfig};
+use kinsynth::world::mesh::load_mesh;
+use kinsynth::{Design, Scenario};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+const BIN: &str = env!("CARGO_BIN_EXE_kinsynth");
+
+/// Longest a single library case may take before it counts as a hang.
+const CASE_LIMIT: Duration = Duration::from_secs(20);
+/// Longest a single run of the binary may take before it counts as a hang.
+const RUN_LIMIT: Duration = Duration::from_secs(30);
+
+fn repo(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
+}
+
+/// Replacement numbers: non-finite, huge, negative, zero and integers beyond 64 bits.
+const NUMBERS: &[&str] = &[
+    "nan",
+    "inf",
+    "-inf",
+    "1e308",
+    "-1e308",
+    "-1",
+    "0",
+    "1e9",
+    "1000000000",
+    "18446744073709551616",
+    "4294967296",
+    "1e-320",
+    "-0",
+    "99999999999999999999999",
+];
+
+/// Seeded mutations of a file's bytes.
+struct Mutator {
+    rng: ChaCha8Rng,
+}
+
+impl Mutator {
+    fn new(seed: u64) -> Self {
+        Mutator {
+            rng: ChaCha8Rng::seed_from_u64(seed),
+        }
+    }
+
+    fn pos(&mut self, len: usize) -> usize {
+        if len == 0 {
+            0
+        } else {
+            self.rng.random_range(0..len)
+        }
+    }
+
+    /// Spans of number tokens in text.
+    fn numbers(bytes: &[u8]) -> Vec<(usize, usize)> {
+        let mut out = Vec::new();
+        let mut i = 0;
+        while i < bytes.len() {
+            let starts = bytes[i].is_ascii_digit()
+                || (bytes[i] == b'-' && bytes.get(i + 1).is_some_and(|b| b.is_ascii_digit()));
+            if starts && (i == 0 || !bytes[i - 1].is_ascii_alphanumeric()) {
+                let mut j = i + 1;
+                while j < bytes.len() && (bytes[j].is_ascii_digit() || b".eE+-".contains(&bytes[j]))
+                {
+                    j += 1;
+                }
+                out.push((i, j));
+                i = j;
+            } else {
+                i += 1;
+            }
+        }
+        out
+    }
+
+    /// One to three mutations of `input`; `text` keeps flipped bytes printable or structural,
+    /// `stl` adds float and count overwrites in a binary STL's records.
+    fn mutate(&mut self, input: &[u8], text: bool, stl: bool) -> (Vec<u8>, String) {
+        let mut b = input.to_vec();
+        let mut what = Vec::new();
+        let n = self.rng.random_range(1..=3);
+        for _ in 0..n {
+            let op = self.rng.random_range(0..if stl { 7 } else { 6 });
+            match op {
+                0 => {
+                    let k = self.rng.random_range(1..=4);
+                    for _ in 0..k {
+                        let p = self.pos(b.len());
+                        if p < b.len() {
+                            b[p] = if text {
+                                *b"[]{}=,.\"'\n#<>/ -0123456789eaz"
+                                    .get(self.rng.random_range(0..29))
+                                    .unwrap_or(&b'x')
+                            } else {
+                                self.rng.random()
+                            };
+                        }
+                    }
+                    what.push(format!("flip {k} bytes"));
+                }
+                1 => {
+                    let p = self.pos(b.len());
+                    b.truncate(p);
+                    what.push(format!("truncate at {p}"));
+                }
+                2 => {
+                    let a = self.pos(b.len());
+                    let len = self.rng.random_range(1..=400).min(b.len() - a.min(b.len()));
+                    let slice = b[a..a + len].to_vec();
+                    let at = self.pos(b.len() + 1);
+                    let times = if self.rng.random_range(0..8) == 0 {
+                        50
+                    } else {
+                        1
+                    };
+                    for _ in 0..times {
+                        b.splice(at..at, slice.iter().copied());
+                    }
+                    what.push(format!("duplicate {len} bytes from {a} at {at} ×{times}"));
+                }
+                3 => {
+                    let a = self.pos(b.len());
+                    let len = self.rng.random_range(1..=200).min(b.len() - a.min(b.len()));
+                    b.drain(a..a + len);
+                    what.push(format!("delete {len} bytes at {a}"));
+                }
+                4 | 5 => {
+                    let spans = Self::numbers(&b);
+                    if spans.is_empty() {
+                        continue;
+                    }
+                    let (s, e) = spans[self.rng.random_range(0..spans.len())];
+                    let v = NUMBERS[self.rng.random_range(0..NUMBERS.len())];
+                    let old = String::from_utf8_lossy(&b[s..e]).into_owned();
+                    b.splice(s..e, v.bytes());
+                    what.push(format!("number {old} at {s} -> {v}"));
+                }
+                _ => {
+                    // Binary STL: a float of a record, or the triangle count.
+                    if b.len() < 84 {
+                        continue;
+                    }
+                    if self.rng.random_range(0..4) == 0 {
+                        let count: u32 = match self.rng.random_range(0..4) {
+                            0 => u32::MAX,
+                            1 => 0,
+                            2 => self.rng.random(),
+                            _ => u32::from_le_bytes([b[80], b[81], b[82], b[83]]).wrapping_add(1),
+                        };
+                        b[80..84].copy_from_slice(&count.to_le_bytes());
+                        what.push(format!("triangle count -> {count}"));
+                    } else {
+                        let records = (b.len() - 84) / 50;
+                        if records == 0 {
+                            continue;
+                        }
+                        let r = self.rng.random_range(0..records);
+                        let f = self.rng.random_range(0..12);
+                        let v: f32 = [f32::NAN, f32::INFINITY, f32::MAX, -1.0, 0.0, 1e30, 1e-40]
+                            [self.rng.random_range(0..7)];
+                        let at = 84 + 50 * r + 4 * f;
+                        b[at..at + 4].copy_from_slice(&v.to_le_bytes());
+                        what.push(format!("record {r} float {f} -> {v}"));
+                    }
+                }
+            }
+        }
+        (b, what.join(", "))
+    }
+}
+
+/// Runs `f` in its own thread with a time limit; a panic or a hang fails the test, naming the
+/// case and saving its input.
+fn run_case<T: Send + 'static>(
+    kind: &str,
+    case: usize,
+    what: &str,
+    input: &[u8],
+    f: impl FnOnce() -> T + Send + 'static,
+) -> T {
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::Builder::new()
+        .stack_size(8 << 20)
+        .spawn(move || {
+            let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f));
+            let _ = tx.send(r);
+        })
+        .unwrap();
+    let fail = |why: &str| -> ! {
+        let saved = std::env::temp_dir().join(format!("kinsynth-fuzz-{kind}-{case}"));
+        let _ = std::fs::write(&saved, input);
+        panic!(
+            "{kind} case {case} ({what}): {why}; input saved to {}",
+            saved.display()
+        )
+    };
+    match rx.recv_timeout(CASE_LIMIT) {
+        Ok(Ok(v)) => v,
+        Ok(Err(_)) => fail("panicked"),
+        Err(_) => fail(&format!("no answer within {CASE_LIMIT:?} (hang)")),
+    }
+}
+
+/// The error must be a single line that names `file`.
+fn assert_one_line(kind: &str, case: usize, what: &str, message: &str, file: &Path) {
+    assert!(
+        !message.is_empty() && !message.contains('\n'),
+        "{kind} case {case} ({what}): not a one-line error: {message:?}"
+    );
+    assert!(
+        message.contains(&file.display().to_string()),
+        "{kind} case {case} ({what}): the error does not name {}: {message}",
+        file.display()
+    );
+}
+
+/// Runs the binary with a time limit: exit 0, or exit 1 with one line `error: …` on stderr.
+/// Never a panic (101), a signal or a hang.
+fn run_binary(kind: &str, case: usize, what: &str, args: &[&std::ffi::OsStr]) {
+    let mut child = Command::new(BIN)
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        if start.elapsed() > RUN_LIMIT {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("{kind} binary case {case} ({what}): no exit within {RUN_LIMIT:?}: {args:?}");
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    };
+    let mut stderr = String::new();
+    use std::io::Read;
+    child
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut stderr)
+        .unwrap();
+    match status.code() {
+        Some(0) => {}
+        Some(1) => {
+            let errors: Vec<&str> = stderr.lines().filter(|l| !l.starts_with("warning:")).collect();
+            assert!(
+                errors.len() == 1 && errors[0].starts_with("error: "),
+                "{kind} binary case {case} ({what}): not a one-line error: {stderr}"
+            );
+        }
+        other => panic!(
+            "{kind} binary case {case} ({what}): exit {other:?} (101 is a panic): {args:?}\n{stderr}"
+        ),
+    }
+}
+
+/// A small planner for checking that accepted inputs can be used.
+fn quick_planner(p: &PlannerConfig) -> PlannerConfig {
+    PlannerConfig {
+        max_iterations: p.max_iterations.min(200),
+        ik_steps: p.ik_steps.min(20),
+        time_limit: Some(2.0),
+        schedule: None,
+        ..p.clone()
+    }
+}
+
+/// A temporary copy of the repository's layout: `examples/scenarios/` for the mutant and a
+/// `meshes` link to the bundled meshes, so the scenarios' relative mesh paths resolve.
+fn layout() -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let scenarios = dir.path().join("examples/scenarios");
+    std::fs::create_dir_all(&scenarios).unwrap();
+    #[cfg(unix)]
+    std::os::unix::fs::symlink(repo("meshes"), dir.path().join("meshes")).unwrap();
+    #[cfg(not(unix))]
+    {
+        std::fs::create_dir_all(dir.path().join("meshes")).unwrap();
+        for m in ["glovebox.stl", "vessel.stl", "pipe_bundle.obj"] {
+            std::fs::copy(
+                repo(&format!("meshes/{m}")),
+                dir.path().join("meshes").join(m),
+            )
+            .unwrap();
+        }
+    }
+    (dir, scenarios)
+}
+
+#[test]
+fn mutated_scenarios() {
+    let (_dir, scenarios) = layout();
+    // Scenarios with meshes load them (the decomposition takes a while): fewer cases.
+    let files = [
+        ("paper-2d.toml", 160),
+        ("paper-3d.toml", 160),
+        ("ur5-cell.toml", 160),
+        ("glovebox.toml", 40),
+        ("pipework.toml", 12),
+    ];
+    let mut m = Mutator::new(1);
+    let mut case = 0;
+    for (name, cases) in files {
+        let original = std::fs::read(repo(&format!("examples/scenarios/{name}"))).unwrap();
+        for k in 0..cases {
+            case += 1;
+            let (bytes, what) = m.mutate(&original, true, false);
+            let what = format!("{name}: {what}");
+            let path = scenarios.join(format!("case{case}.toml"));
+            std::fs::write(&path, &bytes).unwrap();
+            let p = path.clone();
+            let result = run_case("scenario", case, &what, &bytes, move || {
+                Scenario::load(&p).map(|s| {
+                    let _ = s.home_contacts();
+                    let chain = s.space.largest().chain();
+                    let scene = Arc::new(CollisionScene::new(&s.workspace));
+                    let r = reachability(
+                        &chain,
+                        &scene,
+                        &s.workspace.tasks,
+                        &quick_planner(&s.planner),
+                        s.seed,
+                        0,
+                    );
+                    assert!((0.0..=1.0).contains(&r.reachability));
+                })
+            });
+            if let Err(e) = result {
+                assert_one_line("scenario", case, &what, &e.to_string(), &path);
+            }
+            if k % 16 == 0 {
+                run_binary(
+                    "scenario",
+                    case,
+                    &what,
+                    &["check".as_ref(), path.as_os_str()],
+                );
+            }
+        }
+    }
+}
+
+/// A scenario that uses the mesh at `mesh` with `representation`.
+fn mesh_scenario(mesh: &Path, representation: &str) -> String {
+    format!(
+        "[robot]\nlinks = 2\nuniform = {{ a = 0.3, axes = {{ ry = {{ min = -1.0, max = 1.0 }} }} }}\n\n\
+         [[obstacle]]\nshape = \"mesh\"\nfile = \"{}\"\nrepresentation = \"{representation}\"\n\
+         position = [5.0, 0.0, 0.0]\nscale = 0.1\n\n[[task]]\npoint = [0.5, 0.0, 0.1]\n",
+        mesh.display()
+    )
+}
+
+fn fuzz_mesh(name: &str, cases: usize, seed: u64, text: bool, stl: bool) {
+    let dir = tempfile::tempdir().unwrap();
+    let original = std::fs::read(repo(&format!("meshes/{name}"))).unwrap();
+    let ext = Path::new(name).extension().unwrap().to_str().unwrap();
+    let mut m = Mutator::new(seed);
+    for case in 0..cases {
+        let (bytes, what) = m.mutate(&original, text, stl);
+        let path = dir.path().join(format!("case{case}.{ext}"));
+        std::fs::write(&path, &bytes).unwrap();
+        let p = path.clone();
+        let decompose = case % 25 == 0;
+        let result = run_case(name, case, &what, &bytes, move || {
+            load_mesh(&p).map(|mesh| {
+                let _ = mesh.to_convex_hull();
+                let _ = mesh.to_parry_trimesh();
+                if decompose {
+                    let _ = mesh.to_convex_decomposition();
+                }
+            })
+        });
+        if let Err(e) = result {
+            assert_one_line(name, case, &what, &e.to_string(), &path);
+        }
+        if case % 20 == 0 {
+            let scenario = dir.path().join(format!("case{case}.toml"));
+            std::fs::write(&scenario, mesh_scenario(&path, "hull")).unwrap();
+            run_binary(name, case, &what, &["check".as_ref(), scenario.as_os_str()]);
+        }
+    }
+}
+
+#[test]
+fn mutated_binary_stl() {
+    fuzz_mesh("glovebox.stl", 300, 2, false, true);
+}
+
+#[test]
+fn mutated_ascii_stl() {
+    fuzz_mesh("vessel.stl", 150, 3, true, false);
+}
+
+#[test]
+fn mutated_obj() {
+    fuzz_mesh("pipe_bundle.obj", 200, 4, true, false);
+}
+
+/// The largest design of paper-2d, as design JSON and wrapped as a `best.json`.
+fn design_json() -> (String, String) {
+    let s = Scenario::load(&repo("examples/scenarios/paper-2d.toml")).unwrap();
+    let d = s.space.largest();
+    let json = d.to_json();
+    let best = format!("{{\"design\": {json}, \"cost\": 1.0, \"reachability\": 1.0}}");
+    (json, best)
+}
+
+#[test]
+fn mutated_designs() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = Arc::new(Scenario::load(&repo("examples/scenarios/paper-2d.toml")).unwrap());
+    let scene = Arc::new(CollisionScene::new(&s.workspace));
+    let (json, best) = design_json();
+    let mut m = Mutator::new(5);
+    let mut case = 0;
+    for original in [json, best] {
+        for k in 0..250 {
+            case += 1;
+            let (bytes, what) = m.mutate(original.as_bytes(), true, false);
+            let path = dir.path().join(format!("case{case}.json"));
+            std::fs::write(&path, &bytes).unwrap();
+            let (p, s, scene) = (path.clone(), s.clone(), scene.clone());
+            let urdf = dir.path().join(format!("case{case}.urdf"));
+            let result = run_case("design", case, &what, &bytes, move || {
+                Design::load(&p).map(|d| {
+                    let chain = d.chain();
+                    let r = reachability(
+                        &chain,
+                        &scene,
+                        &s.workspace.tasks,
+                        &quick_planner(&s.planner),
+                        1,
+                        0,
+                    );
+                    assert!(r.targets.iter().all(|t| !t.error.is_nan() || !t.reached));
+                    kinsynth::export::write_urdf(&d, &urdf)
+                })
+            });
+            match result {
+                Err(e) => assert_one_line("design", case, &what, &e.to_string(), &path),
+                Ok(Err(e)) => panic!("design case {case} ({what}): export failed: {e}"),
+                Ok(Ok(())) => {}
+            }
+            if k % 25 == 0 {
+                let out = dir.path().join(format!("case{case}-bin.urdf"));
+                run_binary(
+                    "design",
+                    case,
+                    &what,
+                    &[
+                        "urdf".as_ref(),
+                        path.as_os_str(),
+                        "-o".as_ref(),
+                        out.as_os_str(),
+                    ],
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn mutated_urdf() {
+    let dir = tempfile::tempdir().unwrap();
+    let cell = repo("examples/scenarios/ur5-cell.toml");
+    let s = Arc::new(Scenario::load(&cell).unwrap());
+    let scene = Arc::new(CollisionScene::new(&s.workspace));
+    let original = std::fs::read(repo("examples/robots/ur5.urdf")).unwrap();
+    let mut m = Mutator::new(6);
+    for case in 0..400 {
+        let (bytes, what) = m.mutate(&original, true, false);
+        let path = dir.path().join(format!("case{case}.urdf"));
+        std::fs::write(&path, &bytes).unwrap();
+        let (p, s, scene) = (path.clone(), s.clone(), scene.clone());
+        let result = run_case("urdf", case, &what, &bytes, move || {
+            kinsynth::import::load_chain(&p, None, None, None, 4).map(|u| {
+                let r = reachability(
+                    &u.chain,
+                    &scene,
+                    &s.workspace.tasks,
+                    &quick_planner(&s.planner),
+                    1,
+                    0,
+                );
+                assert!((0.0..=1.0).contains(&r.reachability));
+            })
+        });
+        if let Err(e) = result {
+            assert_one_line("urdf", case, &what, &e.to_string(), &path);
+        }
+        if case % 25 == 0 {
+            run_binary(
+                "urdf",
+                case,
+                &what,
+                &[
+                    "reach".as_ref(),
+                    cell.as_os_str(),
+                    "--urdf".as_ref(),
+                    path.as_os_str(),
+                ],
+            );
+        }
+    }
+}
+
+/// A finished short run of paper-2d: its directory holds `checkpoint.json` and `best.json`.
+fn short_run() -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    let scenario = dir.path().join("paper-2d.toml");
+    std::fs::copy(repo("examples/scenarios/paper-2d.toml"), &scenario).unwrap();
+    let out = dir.path().join("run");
+    let o = Command::new(BIN)
+        .arg("optimize")
+        .arg(&scenario)
+        .args(["--evaluations", "40", "--seed", "2", "--quiet", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    dir
+}
+
+#[test]
+fn mutated_checkpoints() {
+    let run = short_run();
+    let original = std::fs::read(run.path().join("run/checkpoint.json")).unwrap();
+    let mut m = Mutator::new(7);
+    for case in 0..300 {
+        let (bytes, what) = m.mutate(&original, true, false);
+        let dir = run.path().join(format!("case{case}"));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("checkpoint.json");
+        std::fs::write(&path, &bytes).unwrap();
+        let d = dir.clone();
+        let result = run_case("checkpoint", case, &what, &bytes, move || {
+            Runner::read_checkpoint(&d).map(|_| ())
+        });
+        if let Err(e) = result {
+            assert_one_line("checkpoint", case, &what, &e.to_string(), &path);
+        }
+        if case % 30 == 0 {
+            run_binary(
+                "checkpoint",
+                case,
+                &what,
+                &[
+                    "optimize".as_ref(),
+                    "--quiet".as_ref(),
+                    "--resume".as_ref(),
+                    dir.as_os_str(),
+                ],
+            );
+        }
+    }
+}
+
+// Regression tests: crash cases found by the fuzzer (and by hand), kept by name.
+
+/// Writes `text` as `name` into a new temporary directory.
+fn file(name: &str, text: &[u8]) -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join(name);
+    std::fs::write(&p, text).unwrap();
+    (dir, p)
+}
+
+/// urdf-rs reports a vector with a line break inside as a message over two lines.
+#[test]
+fn regression_urdf_vector_split_by_a_line_break_gives_one_line() {
+    let (_dir, p) = file(
+        "robot.urdf",
+        b"<robot name=\"r\"><link name=\"a\"/><link name=\"b\"/>\
+          <joint name=\"j\" type=\"revolute\"><parent link=\"a\"/><child link=\"b\"/>\
+          <origin xyz=\"0 -0.08 -0.0000\n00054\"/><axis xyz=\"0 0 1\"/>\
+          <limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/></joint></robot>",
+    );
+    let e = kinsynth::import::load_chain(&p, None, None, None, 4)
+        .unwrap_err()
+        .to_string();
+    assert_one_line("urdf", 0, "regression", &e, &p);
+    assert!(e.contains("expected 3 found 4"), "{e}");
+}
