@@ -189,12 +189,16 @@ impl AllowedCollisions {
         let mut placed = Placed::default();
         chain.fk(chain.home(), &mut frames);
         body.place(chain, &frames, &mut placed);
+        // Contact between two groups; bounding balls cull pairs that are clearly apart.
         let contact = |frames: &_, placed: &_, i: usize, j: usize| -> bool {
             groups[i].bodies.iter().any(|&p| {
-                groups[j]
-                    .bodies
-                    .iter()
-                    .any(|&q| body.pair_distance(frames, placed, p, q) <= 0.0)
+                let (cp, rp) = body.ball(frames, placed, p);
+                groups[j].bodies.iter().any(|&q| {
+                    let (cq, rq) = body.ball(frames, placed, q);
+                    let gap = rp + rq;
+                    (cp - cq).norm_squared() <= gap * gap
+                        && body.pair_distance(frames, placed, p, q) <= 0.0
+                })
             })
         };
         let mut home_fold = None;
