@@ -56,6 +56,22 @@ pub struct UrdfChain {
     pub tip: String,
     /// The capsule radius used.
     pub radius: f64,
+    /// Every URDF link from the base to the tip, with the frame that carries it (see
+    /// [`CarriedLink`]), in chain order.
+    pub carried: Vec<CarriedLink>,
+}
+
+/// A URDF link between base and tip and the chain frame that carries it: the frame right
+/// after free axis `level − 1` ([`crate::kinematics::Frames::axis_frames`]), or the base `F_0`
+/// when `level` is 0.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CarriedLink {
+    /// The URDF link name.
+    pub name: String,
+    /// Free axes moving it: the carrier is the frame after the last of them.
+    pub level: usize,
+    /// The link's frame in its carrier frame.
+    pub pose: IsometryMatrix3<f64>,
 }
 
 fn urdf_err(element: impl Into<String>, reason: impl Into<String>) -> Error {
@@ -429,6 +445,12 @@ pub fn chain_from_urdf(
     // Links rigidly attached to the current chain frame, with their poses in it.
     let mut group: Vec<(&urdf_rs::Link, IsometryMatrix3<f64>)> =
         vec![(links[base.as_str()], IsometryMatrix3::identity())];
+    let carry = |name: &str, level: usize, pose: IsometryMatrix3<f64>| CarriedLink {
+        name: name.to_string(),
+        level,
+        pose,
+    };
+    let mut carried = vec![carry(&base, 0, IsometryMatrix3::identity())];
     // Pose of the current URDF link in the current chain frame.
     let mut pending = IsometryMatrix3::identity();
     let mut chain_links: Vec<Link> = Vec::new();
@@ -447,12 +469,17 @@ pub fn chain_from_urdf(
                 for (_, pose) in &mut group {
                     *pose = inv * *pose;
                 }
+                for c in &mut carried {
+                    c.pose = inv * c.pose;
+                }
                 group.push((child, IsometryMatrix3::identity()));
+                carried.push(carry(&child.name, 0, IsometryMatrix3::identity()));
                 continue;
             }
             started = true;
             pending *= origin;
             group.push((child, pending));
+            carried.push(carry(&child.name, names.len(), pending));
             continue;
         }
         started = true;
@@ -466,6 +493,7 @@ pub fn chain_from_urdf(
                 *last = axis;
                 names.push(j.name.clone());
                 group = vec![(child, IsometryMatrix3::identity())];
+                carried.push(carry(&child.name, names.len(), IsometryMatrix3::identity()));
                 continue;
             }
         }
@@ -489,6 +517,7 @@ pub fn chain_from_urdf(
         names.push(j.name.clone());
         pending = align_iso.inverse();
         group = vec![(child, pending)];
+        carried.push(carry(&child.name, names.len(), pending));
     }
     let Some((link, _, _)) = open else {
         return Err(urdf_err(
@@ -509,6 +538,7 @@ pub fn chain_from_urdf(
         base,
         tip,
         radius,
+        carried,
     })
 }
 
