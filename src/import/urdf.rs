@@ -19,7 +19,8 @@
 //!   that joint's link instead (so a kinsynth export imports with the design's own links).
 //! - Trailing fixed joints up to the tip become a last link without axes (the tip's origin is
 //!   the end effector), unless they are the identity.
-//! - Body: each link is the polyline from the previous frame's origin to its joint origin. When
+//! - Body (this chain's capsule segments, `reach --body capsules`; the default body is the
+//!   links' `<collision>` elements, see [`super::body`]): each link is the polyline from the previous frame's origin to its joint origin. When
 //!   the `<collision>` cylinders (or capsules) of the links rigidly attached to the previous
 //!   frame form such a polyline (within [`POLYLINE_TOLERANCE`]), that is the body (a kinsynth
 //!   export carries its DH bodies this way); otherwise it is the straight segment between the
