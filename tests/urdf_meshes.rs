@@ -604,3 +604,58 @@ fn design_urdf_reach_round_trip_gives_the_same_bodies_and_paths() {
         }
     }
 }
+
+#[test]
+fn merged_co_located_joints_carry_their_intermediate_links() {
+    // Joints a (about x) and b (about y, identity origin) merge into one chain link; the
+    // intermediate link `mid` turns with a only, `tip_link` with a and b.
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("merged.urdf");
+    let boxed = |name: &str| {
+        format!("<link name=\"{name}\"><collision><origin xyz=\"0 0 0.2\" rpy=\"0 0 0\"/><geometry><box size=\"0.02 0.02 0.02\"/></geometry></collision></link>")
+    };
+    let joint = |name: &str, parent: &str, child: &str, z: f64, axis: &str| {
+        format!("<joint name=\"{name}\" type=\"revolute\"><parent link=\"{parent}\"/><child link=\"{child}\"/><origin xyz=\"0 0 {z}\" rpy=\"0 0 0\"/><axis xyz=\"{axis}\"/><limit lower=\"-2\" upper=\"2\" effort=\"1\" velocity=\"1\"/></joint>")
+    };
+    let text = format!(
+        "<robot name=\"m\"><link name=\"base\"/>{}{}<link name=\"tool\"/>{}{}<joint name=\"t\" type=\"fixed\"><parent link=\"tip_link\"/><child link=\"tool\"/><origin xyz=\"0 0 0.3\" rpy=\"0 0 0\"/></joint></robot>",
+        boxed("mid"),
+        boxed("tip_link"),
+        joint("a", "base", "mid", 0.5, "1 0 0"),
+        joint("b", "mid", "tip_link", 0.0, "0 1 0"),
+    );
+    std::fs::write(&p, text).unwrap();
+    let r = import(&p, &ImportOptions::default());
+    assert_eq!(r.kind, BodyKind::Solids);
+    let chain = &r.urdf.chain;
+    assert_eq!(chain.dof(), 2);
+    assert_eq!(
+        chain.free_axes()[0].link,
+        chain.free_axes()[1].link,
+        "merged"
+    );
+    let levels: Vec<(String, usize)> = r
+        .body
+        .solids()
+        .iter()
+        .map(|s| (s.frame.clone(), s.level))
+        .collect();
+    assert_eq!(
+        levels,
+        [("mid".to_string(), 1), ("tip_link".to_string(), 2)]
+    );
+    let (qa, qb) = (0.7, -1.1);
+    let mut frames = chain.frames();
+    let mut placed = kinsynth::collision::body::Placed::default();
+    chain.fk(&[qa, qb], &mut frames);
+    r.body.place(chain, &frames, &mut placed);
+    let rx = nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::x_axis(), qa);
+    let ry = nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::y_axis(), qb);
+    let o = nalgebra::Vector3::new(0.0, 0.0, 0.5);
+    let mid = o + rx * nalgebra::Vector3::new(0.0, 0.0, 0.2);
+    let tip = o + rx * (ry * nalgebra::Vector3::new(0.0, 0.0, 0.2));
+    for (k, want) in [mid, tip].into_iter().enumerate() {
+        let c = placed.centers[k];
+        assert!((c.coords - want).norm() < 1e-12, "solid {k}: {c} vs {want}");
+    }
+}
