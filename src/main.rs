@@ -259,9 +259,28 @@ struct UrdfReach {
     /// collision cylinders and spheres, else 0.05.
     #[arg(long, requires = "urdf")]
     radius: Option<f64>,
+    /// Bodies of the URDF robot's links: `collision` (their <collision> meshes, boxes,
+    /// cylinders, spheres and capsules) or `capsules` (capsules between joint origins).
+    #[arg(long, requires = "urdf", default_value_t = kinsynth::import::BodyChoice::Collision)]
+    body: kinsynth::import::BodyChoice,
+    /// Where `package://NAME/…` mesh URIs point: NAME=DIR (repeatable). Default: a folder
+    /// NAME above the URDF.
+    #[arg(long, requires = "urdf", value_parser = package_arg)]
+    package: Vec<(String, PathBuf)>,
+    /// An SRDF whose <disable_collisions> link pairs are never checked for self-collision.
+    #[arg(long, requires = "urdf")]
+    srdf: Option<PathBuf>,
     /// Write task_{index}.csv and task_{index}.json for every reached task into this directory.
     #[arg(long)]
     trajectories: Option<PathBuf>,
+}
+
+/// Parses `--package NAME=DIR`.
+fn package_arg(s: &str) -> Result<(String, PathBuf), String> {
+    match s.split_once('=') {
+        Some((n, d)) if !n.is_empty() && !d.is_empty() => Ok((n.to_string(), PathBuf::from(d))),
+        _ => Err(format!("`{s}`: expected NAME=DIR")),
+    }
 }
 
 fn run(cli: Cli) -> Result<(), kinsynth::Error> {
@@ -566,20 +585,31 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
                 (Some(p), None, None) => kinsynth::optimize::runner::Replay::from_best(p)?,
                 _ => None,
             };
-            let (chain, urdf_names) = match &urdf.urdf {
+            let (chain, urdf_names, body) = match &urdf.urdf {
                 Some(p) => {
-                    let r = kinsynth::import::load_chain(
+                    let options = kinsynth::import::ImportOptions {
+                        body: urdf.body,
+                        packages: urdf.package.clone(),
+                        srdf: urdf.srdf.clone(),
+                        self_collision: s.planner.self_collision.clone(),
+                    };
+                    let r = kinsynth::import::load_robot(
                         p,
                         urdf.base_frame.as_deref(),
                         urdf.tip_frame.as_deref(),
                         urdf.radius,
                         s.space.template().colliders_per_link,
+                        &options,
                     )?;
-                    (r.chain, Some(r.joint_names))
+                    if let Some(note) = &r.note {
+                        eprintln!("note: {}: {note}", p.display());
+                    }
+                    let body = std::sync::Arc::new(r.body);
+                    (r.urdf.chain, Some(r.urdf.joint_names), Some(body))
                 }
                 None => match &design {
-                    Some(p) => (kinsynth::Design::load(p)?.chain(), None),
-                    None => (s.space.largest().chain(), None),
+                    Some(p) => (kinsynth::Design::load(p)?.chain(), None, None),
+                    None => (s.space.largest().chain(), None, None),
                 },
             };
             let mut planner = replay
@@ -606,14 +636,26 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
             let mut reports: Vec<kinsynth::planning::ReachReport> = (0..n)
                 .into_par_iter()
                 .map(|k| {
-                    kinsynth::planning::reachability(
-                        &chain,
-                        &scene,
-                        &s.workspace.tasks,
-                        &planner,
-                        first_seed.wrapping_add(k),
-                        stream,
-                    )
+                    let seed = first_seed.wrapping_add(k);
+                    match &body {
+                        Some(body) => kinsynth::planning::reach::reachability_of(
+                            &chain,
+                            body.clone(),
+                            &scene,
+                            &s.workspace.tasks,
+                            &planner,
+                            seed,
+                            stream,
+                        ),
+                        None => kinsynth::planning::reachability(
+                            &chain,
+                            &scene,
+                            &s.workspace.tasks,
+                            &planner,
+                            seed,
+                            stream,
+                        ),
+                    }
                 })
                 .collect();
             let elapsed = start.elapsed();

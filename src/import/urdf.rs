@@ -19,7 +19,8 @@
 //!   that joint's link instead (so a kinsynth export imports with the design's own links).
 //! - Trailing fixed joints up to the tip become a last link without axes (the tip's origin is
 //!   the end effector), unless they are the identity.
-//! - Body: each link is the polyline from the previous frame's origin to its joint origin. When
+//! - Body (this chain's capsule segments, `reach --body capsules`; the default body is the
+//!   links' `<collision>` elements, see [`super::body`]): each link is the polyline from the previous frame's origin to its joint origin. When
 //!   the `<collision>` cylinders (or capsules) of the links rigidly attached to the previous
 //!   frame form such a polyline (within [`POLYLINE_TOLERANCE`]), that is the body (a kinsynth
 //!   export carries its DH bodies this way); otherwise it is the straight segment between the
@@ -60,6 +61,22 @@ pub struct UrdfChain {
     pub tip: String,
     /// The capsule radius used.
     pub radius: f64,
+    /// Every URDF link from the base to the tip, with the frame that carries it (see
+    /// [`CarriedLink`]), in chain order.
+    pub carried: Vec<CarriedLink>,
+}
+
+/// A URDF link between base and tip and the chain frame that carries it: the frame right
+/// after free axis `level − 1` ([`crate::kinematics::Frames::axis_frames`]), or the base `F_0`
+/// when `level` is 0.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CarriedLink {
+    /// The URDF link name.
+    pub name: String,
+    /// Free axes moving it: the carrier is the frame after the last of them.
+    pub level: usize,
+    /// The link's frame in its carrier frame.
+    pub pose: IsometryMatrix3<f64>,
 }
 
 fn urdf_err(element: impl Into<String>, reason: impl Into<String>) -> Error {
@@ -526,6 +543,12 @@ pub fn chain_from_urdf(
     // Links rigidly attached to the current chain frame, with their poses in it.
     let mut group: Vec<(&urdf_rs::Link, IsometryMatrix3<f64>)> =
         vec![(links[base.as_str()], IsometryMatrix3::identity())];
+    let carry = |name: &str, level: usize, pose: IsometryMatrix3<f64>| CarriedLink {
+        name: name.to_string(),
+        level,
+        pose,
+    };
+    let mut carried = vec![carry(&base, 0, IsometryMatrix3::identity())];
     // Pose of the current URDF link in the current chain frame.
     let mut pending = IsometryMatrix3::identity();
     let mut chain_links: Vec<Link> = Vec::new();
@@ -544,12 +567,17 @@ pub fn chain_from_urdf(
                 for (_, pose) in &mut group {
                     *pose = inv * *pose;
                 }
+                for c in &mut carried {
+                    c.pose = inv * c.pose;
+                }
                 group.push((child, IsometryMatrix3::identity()));
+                carried.push(carry(&child.name, 0, IsometryMatrix3::identity()));
                 continue;
             }
             started = true;
             pending *= origin;
             group.push((child, pending));
+            carried.push(carry(&child.name, names.len(), pending));
             continue;
         }
         started = true;
@@ -563,6 +591,7 @@ pub fn chain_from_urdf(
                 *last = axis;
                 names.push(j.name.clone());
                 group = vec![(child, IsometryMatrix3::identity())];
+                carried.push(carry(&child.name, names.len(), IsometryMatrix3::identity()));
                 continue;
             }
         }
@@ -586,6 +615,7 @@ pub fn chain_from_urdf(
         names.push(j.name.clone());
         pending = align_iso.inverse();
         group = vec![(child, pending)];
+        carried.push(carry(&child.name, names.len(), pending));
     }
     let Some((link, _, _)) = open else {
         return Err(urdf_err(
@@ -606,6 +636,7 @@ pub fn chain_from_urdf(
         base,
         tip,
         radius,
+        carried,
     })
 }
 

@@ -103,6 +103,8 @@ pub struct Chain {
     /// it (the joint's child link).
     axis_frames: Vec<String>,
     layout: ArcLayout,
+    /// No body segments ([`Chain::without_segments`]): forward kinematics writes none.
+    bare: bool,
 }
 
 /// See [`Chain::arc_layout`].
@@ -356,7 +358,35 @@ impl Chain {
             segment_info: info,
             axis_frames,
             layout,
+            bare: false,
         }
+    }
+
+    /// The same kinematics without body segments, for a robot whose body is made of solids
+    /// only (an imported arm's collision meshes). Frames, joint origins, axis frames and the
+    /// arc positions of joints and axes ([`ArcLayout::joint`], [`ArcLayout::axis`], computed
+    /// from the link geometry, which the motion bounds of solids rely on) are unchanged;
+    /// [`Chain::segment_count`] becomes 0, [`Chain::fk`] writes no segment, and the point
+    /// colliders, which lie on the segments, go too ([`Chain::colliders_per_link`] is 0).
+    pub fn without_segments(mut self) -> Self {
+        for l in &mut self.links {
+            l.knees.clear();
+            l.has_body = false;
+            l.segments = 0..0;
+        }
+        self.segment_count = 0;
+        self.segment_info.clear();
+        self.colliders_per_link = 0;
+        self.layout.segment_end.clear();
+        self.layout.segment_link.clear();
+        self.layout.segment_slider.clear();
+        self.bare = true;
+        self
+    }
+
+    /// True for a chain from [`Chain::without_segments`].
+    pub fn is_bare(&self) -> bool {
+        self.bare
     }
 
     /// The rod of a prismatic axis with range `[min, max]`: a fixed-length body on the joint's
@@ -520,15 +550,19 @@ impl Chain {
                     Op::TransConst { axis, v } => {
                         let from = Point3::from(pos);
                         pos += rot.column(axis.index() - 3) * v;
-                        out.segments[seg] = [from, Point3::from(pos)];
-                        seg += 1;
+                        if !self.bare {
+                            out.segments[seg] = [from, Point3::from(pos)];
+                            seg += 1;
+                        }
                     }
                     Op::TransFree { axis, k, lo, hi } => {
                         let dir = rot.column(axis.index() - 3).into_owned();
                         pos += dir * a[k];
-                        out.segments[seg] =
-                            [Point3::from(pos + dir * lo), Point3::from(pos + dir * hi)];
-                        seg += 1;
+                        if !self.bare {
+                            out.segments[seg] =
+                                [Point3::from(pos + dir * lo), Point3::from(pos + dir * hi)];
+                            seg += 1;
+                        }
                         let f = &mut out.axis_frames[k];
                         f.translation.vector = pos;
                         *f.rotation.matrix_mut_unchecked() = rot;

@@ -193,6 +193,14 @@ impl RobotBody {
         &self.acm
     }
 
+    /// Never checks the frame pairs of `extra` against each other (for example the
+    /// `<disable_collisions>` of an SRDF), on top of the computed matrix.
+    pub fn disable_pairs(&mut self, extra: &[super::acm::DisabledPair]) {
+        let mut acm = std::mem::take(&mut self.acm);
+        acm.disable(self, extra);
+        self.acm = acm;
+    }
+
     /// The self-collision pairs checked, as body indices `(p, q)` with `level(p) ≤ level(q)`.
     pub fn self_pairs(&self) -> &[(u32, u32)] {
         self.acm.pairs()

@@ -1,0 +1,556 @@
+//! The robot body of an imported URDF arm: its links' `<collision>` elements as bodies.
+//!
+//! Rules (see also the README's "URDF" section):
+//!
+//! - Every URDF link from the base to the tip ([`super::urdf::UrdfChain::carried`]) rides on
+//!   the frame right after the last moving joint above it (or on the base), also inside merged
+//!   chain links. Links off the base–tip path carry no body.
+//! - `<mesh>` (STL, OBJ or COLLADA `.dae`, read by the `mesh-loader` crate, scaled by `scale`)
+//!   becomes its convex hull (a parry `ConvexPolyhedron`); `<box>`, `<cylinder>` (along z),
+//!   `<sphere>` and `<capsule>` become themselves. A `<cylinder>` with a `<sphere>` of the same
+//!   radius at each end centre (as `kinsynth urdf` writes every capsule) is one capsule.
+//! - When every body is such a capsule and together they are exactly the chain's capsule
+//!   segments (same carrier, same ends within [`MATCH_TOLERANCE`], same radius), the body *is*
+//!   the chain's capsule body: a kinsynth export imports with the very body it was planned with.
+//!   Otherwise the bodies are solids on a chain without capsule segments
+//!   ([`Chain::without_segments`]).
+//! - Without any `<collision>` between base and tip, the links are capsules between joint
+//!   origins, as with `--body capsules`, and [`ImportedRobot::note`] says so.
+//! - `package://NAME/…` resolves against the given packages, else against the folders above
+//!   the URDF (a folder named `NAME`, or one holding a folder `NAME`); `file://` and plain
+//!   paths resolve relative to the URDF's folder.
+//! - An SRDF's `<disable_collisions link1 link2 reason/>` pairs are never checked.
+
+use super::urdf::{chain_from_urdf, read_urdf, UrdfChain};
+use crate::collision::body::{DisabledPair, Reason, RobotBody, SelfCollisionConfig, Solid};
+use crate::error::{Error, Result};
+use crate::export::urdf::isometry_of;
+use crate::kinematics::Chain;
+use crate::world::convert::to_parry_point;
+use nalgebra::{IsometryMatrix3, Point3, Rotation3, Translation3, Vector3};
+use parry3d_f64::shape::SharedShape;
+use std::path::{Path, PathBuf};
+
+/// Distance (m) within which a capsule's ends count as a chain segment's ends, and a sphere's
+/// centre as a cylinder's end centre.
+pub const MATCH_TOLERANCE: f64 = 1e-9;
+
+/// Which geometry stands for an imported robot's links (`reach --body`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum BodyChoice {
+    /// The links' `<collision>` elements (the default).
+    #[default]
+    Collision,
+    /// Capsules along the polyline between joint origins (the importer's chain segments).
+    Capsules,
+}
+
+impl BodyChoice {
+    /// The name used on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            BodyChoice::Collision => "collision",
+            BodyChoice::Capsules => "capsules",
+        }
+    }
+}
+
+impl std::str::FromStr for BodyChoice {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s {
+            "collision" => Ok(BodyChoice::Collision),
+            "capsules" => Ok(BodyChoice::Capsules),
+            _ => Err(format!(
+                "unknown body `{s}` (expected collision or capsules)"
+            )),
+        }
+    }
+}
+
+impl std::fmt::Display for BodyChoice {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// What an imported robot's body is made of.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BodyKind {
+    /// The chain's capsule segments, one radius for all (`--body capsules`, or no collision
+    /// geometry at all).
+    Capsules,
+    /// The chain's capsule segments, recognised in the `<collision>` elements (a kinsynth
+    /// export), each with its own radius.
+    CollisionCapsules,
+    /// Solids from the `<collision>` elements on a chain without capsule segments.
+    Solids,
+}
+
+/// How to import a robot's body.
+#[derive(Clone, Debug, Default)]
+pub struct ImportOptions {
+    /// Collision elements or capsules.
+    pub body: BodyChoice,
+    /// `package://` roots: `(NAME, DIR)`.
+    pub packages: Vec<(String, PathBuf)>,
+    /// An SRDF whose `<disable_collisions>` pairs are never checked.
+    pub srdf: Option<PathBuf>,
+    /// Self-collision settings for the allowed-collision matrix.
+    pub self_collision: SelfCollisionConfig,
+}
+
+/// A URDF robot with its body.
+#[derive(Clone, Debug)]
+pub struct ImportedRobot {
+    /// The chain (without capsule segments when the body is made of solids) and its names.
+    pub urdf: UrdfChain,
+    /// The robot body the checkers use.
+    pub body: RobotBody,
+    /// What the body is made of.
+    pub kind: BodyKind,
+    /// A remark for the user (for example: no collision geometry, capsules used).
+    pub note: Option<String>,
+}
+
+/// One collision element, in its carrier frame.
+enum Piece {
+    /// A capsule from `a` to `b` of radius `r`; `local` has the axis along z, `half` its half
+    /// length.
+    Capsule {
+        a: Point3<f64>,
+        b: Point3<f64>,
+        r: f64,
+        local: IsometryMatrix3<f64>,
+        half: f64,
+    },
+    /// A primitive shape at `local`.
+    Shape {
+        local: IsometryMatrix3<f64>,
+        shape: SharedShape,
+    },
+    /// A mesh file at `local`, scaled.
+    Mesh {
+        local: IsometryMatrix3<f64>,
+        filename: String,
+        scale: [f64; 3],
+    },
+}
+
+struct Element {
+    /// Index into [`UrdfChain::carried`].
+    carried: usize,
+    piece: Piece,
+}
+
+fn link_err(link: &str, reason: impl Into<String>) -> Error {
+    Error::Urdf {
+        element: format!("link '{link}'"),
+        reason: reason.into(),
+    }
+}
+
+/// The collision elements of one URDF link at `pose` in its carrier, with capsule triples
+/// (cylinder + end spheres of the same radius) joined.
+fn link_pieces(link: &urdf_rs::Link, pose: &IsometryMatrix3<f64>) -> Vec<Piece> {
+    use urdf_rs::Geometry as G;
+    let poses: Vec<IsometryMatrix3<f64>> = link
+        .collision
+        .iter()
+        .map(|c| pose * isometry_of(&c.origin))
+        .collect();
+    let mut used = vec![false; link.collision.len()];
+    let mut out = Vec::new();
+    let sphere_at = |used: &[bool], r: f64, p: &Point3<f64>| -> Option<usize> {
+        link.collision.iter().enumerate().position(|(k, c)| {
+            !used[k]
+                && matches!(c.geometry, G::Sphere { radius } if radius == r)
+                && (Point3::from(poses[k].translation.vector) - p).norm() <= MATCH_TOLERANCE
+        })
+    };
+    // Cylinders first claim their end spheres.
+    let mut capsules = vec![None; link.collision.len()];
+    for (k, c) in link.collision.iter().enumerate() {
+        if let G::Cylinder { radius, length } = c.geometry {
+            let t = &poses[k];
+            let h = t.rotation * Vector3::new(0.0, 0.0, 0.5 * length);
+            let m = Point3::from(t.translation.vector);
+            let (a, b) = (m - h, m + h);
+            if let Some(s1) = sphere_at(&used, radius, &a) {
+                used[s1] = true;
+                if let Some(s2) = sphere_at(&used, radius, &b) {
+                    used[s2] = true;
+                    capsules[k] = Some((a, b));
+                } else {
+                    used[s1] = false;
+                }
+            }
+        }
+    }
+    for (k, c) in link.collision.iter().enumerate() {
+        if used[k] {
+            continue;
+        }
+        let local = poses[k];
+        out.push(match &c.geometry {
+            G::Cylinder { radius, length } => match capsules[k] {
+                Some((a, b)) => Piece::Capsule {
+                    a,
+                    b,
+                    r: *radius,
+                    local,
+                    half: 0.5 * length,
+                },
+                None => Piece::Shape {
+                    // parry's cylinder runs along y, URDF's along z.
+                    local: local
+                        * IsometryMatrix3::from_parts(
+                            Translation3::identity(),
+                            Rotation3::from_axis_angle(
+                                &Vector3::x_axis(),
+                                std::f64::consts::FRAC_PI_2,
+                            ),
+                        ),
+                    shape: SharedShape::cylinder(0.5 * length, *radius),
+                },
+            },
+            G::Capsule { radius, length } => {
+                let h = local.rotation * Vector3::new(0.0, 0.0, 0.5 * length);
+                let m = Point3::from(local.translation.vector);
+                Piece::Capsule {
+                    a: m - h,
+                    b: m + h,
+                    r: *radius,
+                    local,
+                    half: 0.5 * length,
+                }
+            }
+            G::Sphere { radius } => Piece::Shape {
+                local,
+                shape: SharedShape::ball(*radius),
+            },
+            G::Box { size } => Piece::Shape {
+                local,
+                shape: SharedShape::cuboid(0.5 * size.0[0], 0.5 * size.0[1], 0.5 * size.0[2]),
+            },
+            G::Mesh { filename, scale } => Piece::Mesh {
+                local,
+                filename: filename.clone(),
+                scale: scale.as_ref().map_or([1.0; 3], |s| s.0),
+            },
+        });
+    }
+    out
+}
+
+/// Where a mesh URI points: `package://NAME/rest` against `packages`, else against the folders
+/// above `urdf` (a folder named `NAME`, or one holding a folder `NAME`); `file://` and plain
+/// paths relative to the URDF's folder. The error says what could not be resolved.
+pub fn resolve_mesh(
+    uri: &str,
+    urdf: &Path,
+    packages: &[(String, PathBuf)],
+) -> std::result::Result<PathBuf, String> {
+    let dir = match urdf.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    if let Some(rest) = uri.strip_prefix("package://") {
+        let (name, rel) = rest.split_once('/').unwrap_or((rest, ""));
+        if name.is_empty() {
+            return Err("a package:// URI without a package name".into());
+        }
+        if let Some((_, root)) = packages.iter().find(|(n, _)| n == name) {
+            return Ok(root.join(rel));
+        }
+        let start = std::fs::canonicalize(&dir).unwrap_or(dir);
+        for up in start.ancestors() {
+            if up.file_name().is_some_and(|f| f == name) {
+                return Ok(up.join(rel));
+            }
+            let inside = up.join(name);
+            if inside.is_dir() {
+                return Ok(inside.join(rel));
+            }
+        }
+        return Err(format!(
+            "package '{name}' not found in the folders above the URDF; give --package {name}=DIR"
+        ));
+    }
+    let path = uri.strip_prefix("file://").unwrap_or(uri);
+    if path.is_empty() {
+        return Err("an empty file name".into());
+    }
+    let p = Path::new(path);
+    Ok(if p.is_absolute() {
+        p.to_path_buf()
+    } else {
+        dir.join(p)
+    })
+}
+
+/// The convex hull of the mesh file `path` (STL, OBJ or COLLADA), each vertex scaled by
+/// `scale`, with its number of vertices. The error says what is wrong with the file.
+pub fn load_hull(
+    path: &Path,
+    scale: [f64; 3],
+) -> std::result::Result<(SharedShape, usize), String> {
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot read: {e}"))?;
+    if bytes.is_empty() {
+        return Err("empty file".into());
+    }
+    let scene = mesh_loader::Loader::default()
+        .load_from_slice(&bytes, path)
+        .map_err(|e| format!("not a readable mesh: {e}"))?;
+    let mut points = Vec::new();
+    for m in &scene.meshes {
+        for f in &m.faces {
+            for &i in f {
+                let Some(v) = m.vertices.get(i as usize) else {
+                    return Err(format!(
+                        "a triangle refers to vertex {i}, which does not exist"
+                    ));
+                };
+                let p = Point3::new(
+                    f64::from(v[0]) * scale[0],
+                    f64::from(v[1]) * scale[1],
+                    f64::from(v[2]) * scale[2],
+                );
+                if !p.coords.iter().all(|x| x.is_finite()) {
+                    return Err(format!("vertex {i} is not finite"));
+                }
+                points.push(to_parry_point(&p));
+            }
+        }
+    }
+    if points.is_empty() {
+        return Err("the mesh has no triangles".into());
+    }
+    let n = points.len();
+    SharedShape::convex_hull(&points)
+        .map(|h| (h, n))
+        .ok_or_else(|| "the mesh is flat or degenerate: it has no convex hull".into())
+}
+
+/// Reads the `<disable_collisions link1 link2 reason/>` pairs of an SRDF file. Every link must
+/// be one of `robot`'s; errors name the SRDF (and the URDF `urdf` for unknown links).
+pub fn read_srdf(path: &Path, robot: &urdf_rs::Robot, urdf: &Path) -> Result<Vec<DisabledPair>> {
+    let text = std::fs::read_to_string(path).map_err(|source| Error::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let parse = |message: String| Error::Parse {
+        file: path.to_path_buf(),
+        message,
+    };
+    let doc =
+        roxmltree::Document::parse(&text).map_err(|e| parse(format!("not a valid SRDF: {e}")))?;
+    let mut out = Vec::new();
+    for n in doc
+        .descendants()
+        .filter(|n| n.has_tag_name("disable_collisions"))
+    {
+        let line = doc.text_pos_at(n.range().start).row;
+        let mut names = [String::new(), String::new()];
+        for (k, attr) in ["link1", "link2"].into_iter().enumerate() {
+            let Some(v) = n.attribute(attr) else {
+                return Err(parse(format!(
+                    "line {line}: <disable_collisions> has no {attr} attribute"
+                )));
+            };
+            if !robot.links.iter().any(|l| l.name == v) {
+                return Err(parse(format!(
+                    "line {line}: <disable_collisions {attr}=\"{v}\">: the URDF {} has no link '{v}'",
+                    urdf.display()
+                )));
+            }
+            names[k] = v.to_string();
+        }
+        let reason = match n.attribute("reason") {
+            Some("Adjacent") => Reason::Adjacent,
+            Some("Default") => Reason::Default,
+            Some("Always") => Reason::Always,
+            _ => Reason::User,
+        };
+        let [link1, link2] = names;
+        out.push(DisabledPair {
+            link1,
+            link2,
+            reason,
+        });
+    }
+    Ok(out)
+}
+
+/// Chain link (from 1; 0 for the base) owning a body carried after `level` free axes.
+fn owner(chain: &Chain, level: usize) -> usize {
+    if level == 0 {
+        0
+    } else {
+        chain.free_axes()[level - 1].link
+    }
+}
+
+/// The carrier frame of `level` in `frames`.
+fn carrier(frames: &crate::kinematics::Frames, level: usize) -> IsometryMatrix3<f64> {
+    if level == 0 {
+        frames.frames[0]
+    } else {
+        frames.axis_frames[level - 1]
+    }
+}
+
+/// The radius of each chain segment, when the capsule `elements` are exactly the chain's
+/// segments (see the module documentation); `None` otherwise.
+fn match_segments(chain: &Chain, carried: &UrdfChain, elements: &[Element]) -> Option<Vec<f64>> {
+    let n = chain.segment_count();
+    if elements.len() != n {
+        return None;
+    }
+    let mut frames = chain.frames();
+    chain.fk(chain.home(), &mut frames);
+    let mut used = vec![false; n];
+    let mut radii = vec![0.0; n];
+    for (s, seg) in frames.segments.iter().enumerate() {
+        let level = chain.segment_info(s).level;
+        let close = |p: &Point3<f64>, q: &Point3<f64>| (p - q).norm() <= MATCH_TOLERANCE;
+        let hit = elements.iter().enumerate().position(|(k, e)| {
+            let c = &carried.carried[e.carried];
+            match &e.piece {
+                Piece::Capsule { a, b, .. } if !used[k] && c.level == level => {
+                    let t = carrier(&frames, level);
+                    let (a, b) = (t * a, t * b);
+                    (close(&a, &seg[0]) && close(&b, &seg[1]))
+                        || (close(&a, &seg[1]) && close(&b, &seg[0]))
+                }
+                _ => false,
+            }
+        })?;
+        used[hit] = true;
+        if let Piece::Capsule { r, .. } = elements[hit].piece {
+            radii[s] = r;
+        }
+    }
+    Some(radii)
+}
+
+/// The body of the imported chain `urdf` of `robot` (read from the file `path`) as `options`
+/// say. Errors name the link and the file concerned (not yet the URDF: see [`load_robot`]).
+pub fn robot_body(
+    robot: &urdf_rs::Robot,
+    urdf: UrdfChain,
+    path: &Path,
+    options: &ImportOptions,
+) -> Result<ImportedRobot> {
+    let cfg = &options.self_collision;
+    let capsules = |urdf: UrdfChain, note: Option<String>| {
+        let body = RobotBody::new(&urdf.chain, Vec::new(), cfg);
+        ImportedRobot {
+            urdf,
+            body,
+            kind: BodyKind::Capsules,
+            note,
+        }
+    };
+    if options.body == BodyChoice::Capsules {
+        return Ok(capsules(urdf, None));
+    }
+    let mut elements = Vec::new();
+    for (k, c) in urdf.carried.iter().enumerate() {
+        let link = robot
+            .links
+            .iter()
+            .find(|l| l.name == c.name)
+            .expect("carried links are the robot's");
+        elements.extend(
+            link_pieces(link, &c.pose)
+                .into_iter()
+                .map(|piece| Element { carried: k, piece }),
+        );
+    }
+    if elements.is_empty() {
+        return Ok(capsules(
+            urdf,
+            Some(
+                "no <collision> geometry between base and tip: the links are capsules between joint origins"
+                    .into(),
+            ),
+        ));
+    }
+    if elements
+        .iter()
+        .all(|e| matches!(e.piece, Piece::Capsule { .. }))
+    {
+        if let Some(radii) = match_segments(&urdf.chain, &urdf, &elements) {
+            let body = RobotBody::with_radii(&urdf.chain, radii, Vec::new(), cfg);
+            return Ok(ImportedRobot {
+                urdf,
+                body,
+                kind: BodyKind::CollisionCapsules,
+                note: None,
+            });
+        }
+    }
+    let mut urdf = urdf;
+    urdf.chain = urdf.chain.clone().without_segments();
+    let chain = &urdf.chain;
+    let mut solids = Vec::with_capacity(elements.len());
+    for e in elements {
+        let c = &urdf.carried[e.carried];
+        let (local, shape) = match e.piece {
+            Piece::Capsule { r, local, half, .. } => (local, SharedShape::capsule_z(half, r)),
+            Piece::Shape { local, shape } => (local, shape),
+            Piece::Mesh {
+                local,
+                filename,
+                scale,
+            } => {
+                let file = resolve_mesh(&filename, path, &options.packages)
+                    .map_err(|why| link_err(&c.name, format!("mesh '{filename}': {why}")))?;
+                let (hull, _) = load_hull(&file, scale).map_err(|why| {
+                    link_err(
+                        &c.name,
+                        format!("mesh '{filename}' ({}): {why}", file.display()),
+                    )
+                })?;
+                (local, hull)
+            }
+        };
+        solids.push(Solid::new(
+            c.level,
+            local,
+            shape,
+            owner(chain, c.level),
+            c.name.clone(),
+        ));
+    }
+    let body = RobotBody::new(chain, solids, cfg);
+    Ok(ImportedRobot {
+        urdf,
+        body,
+        kind: BodyKind::Solids,
+        note: None,
+    })
+}
+
+/// Reads the URDF `path`, imports its chain ([`chain_from_urdf`]) and its body
+/// ([`robot_body`]), and applies the SRDF of `options`. Every error names the URDF (or the
+/// SRDF), the link and the file concerned.
+pub fn load_robot(
+    path: &Path,
+    base: Option<&str>,
+    tip: Option<&str>,
+    radius: Option<f64>,
+    colliders_per_link: usize,
+    options: &ImportOptions,
+) -> Result<ImportedRobot> {
+    let robot = read_urdf(path)?;
+    let urdf = chain_from_urdf(&robot, base, tip, radius, colliders_per_link)
+        .map_err(|e| e.in_file(path))?;
+    let mut out = robot_body(&robot, urdf, path, options).map_err(|e| e.in_file(path))?;
+    if let Some(srdf) = &options.srdf {
+        let pairs = read_srdf(srdf, &robot, path)?;
+        out.body.disable_pairs(&pairs);
+    }
+    Ok(out)
+}
