@@ -295,7 +295,8 @@ pub fn load_hull(
     path: &Path,
     scale: [f64; 3],
 ) -> std::result::Result<(SharedShape, usize), String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot read: {e}"))?;
+    let bytes = crate::limits::read_file(path, crate::limits::MAX_MESH_FILE_BYTES)
+        .map_err(|e| format!("cannot read: {e}"))?;
     if bytes.is_empty() {
         return Err("empty file".into());
     }
@@ -335,10 +336,13 @@ pub fn load_hull(
 /// Reads the `<disable_collisions link1 link2 reason/>` pairs of an SRDF file. Every link must
 /// be one of `robot`'s; errors name the SRDF (and the URDF `urdf` for unknown links).
 pub fn read_srdf(path: &Path, robot: &urdf_rs::Robot, urdf: &Path) -> Result<Vec<DisabledPair>> {
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Read {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let text =
+        crate::limits::read_text(path, crate::limits::MAX_TEXT_FILE_BYTES).map_err(|source| {
+            Error::Read {
+                path: path.to_path_buf(),
+                source,
+            }
+        })?;
     let parse = |message: String| Error::Parse {
         file: path.to_path_buf(),
         message,

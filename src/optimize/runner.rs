@@ -312,10 +312,12 @@ impl Replay {
     /// The replay data of a `best.json`, or `None` for another design file (or a `best.json`
     /// written before streams were recorded).
     pub fn from_best(path: &Path) -> Result<Option<Replay>> {
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Read {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = crate::limits::read_text(path, crate::limits::MAX_TEXT_FILE_BYTES).map_err(
+            |source| Error::Read {
+                path: path.to_path_buf(),
+                source,
+            },
+        )?;
         let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| Error::Parse {
             file: path.to_path_buf(),
             message: e.to_string(),
@@ -552,10 +554,12 @@ impl<'a> Runner<'a> {
             source,
         })?;
         let checkpoint_path = self.out.join(files::CHECKPOINT);
-        let scenario_bytes = std::fs::read(&self.scenario_path).map_err(|source| Error::Read {
-            path: self.scenario_path.clone(),
-            source,
-        })?;
+        let scenario_bytes =
+            crate::limits::read_file(&self.scenario_path, crate::limits::MAX_TEXT_FILE_BYTES)
+                .map_err(|source| Error::Read {
+                    path: self.scenario_path.clone(),
+                    source,
+                })?;
         let scenario_hash = fingerprint(&scenario_bytes);
         let shape = ScenarioShape::of(self.scenario);
         if let Some(c) = &resume {
@@ -631,21 +635,21 @@ impl<'a> Runner<'a> {
             }
             .clamp(0.0, 1.0);
             let mut rng = ChaCha8Rng::seed_from_u64(o.seed);
-            rng.set_stream(OPTIMIZER_STREAM + generation);
+            rng.set_stream(OPTIMIZER_STREAM.wrapping_add(generation));
             let report = optimizer.step(StepContext {
                 problem: &objective,
                 rng: &mut rng,
                 first_stream: evaluations,
                 progress,
             });
-            evaluations += report.evaluations;
-            generation += 1;
+            evaluations = evaluations.saturating_add(report.evaluations);
+            generation = generation.saturating_add(1);
             let best = optimizer.best().expect("a best after a step").clone();
             if best.cost < best_cost {
                 best_cost = best.cost;
                 stale = 0;
             } else {
-                stale += 1;
+                stale = stale.saturating_add(1);
             }
             let best_design = objective.space().try_decode(&best.x)?;
             let row = HistoryRow {
