@@ -26,7 +26,7 @@ const BIN: &str = env!("CARGO_BIN_EXE_kinsynth");
 /// Longest a single library case may take before it counts as a hang.
 const CASE_LIMIT: Duration = Duration::from_secs(20);
 /// Longest a single run of the binary may take before it counts as a hang.
-const RUN_LIMIT: Duration = Duration::from_secs(30);
+const RUN_LIMIT: Duration = Duration::from_secs(60);
 
 fn repo(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
@@ -285,6 +285,10 @@ fn quick_planner(p: &PlannerConfig) -> PlannerConfig {
         ik_steps: p.ik_steps.min(20),
         time_limit: Some(2.0),
         schedule: None,
+        self_collision: kinsynth::collision::SelfCollisionConfig {
+            samples: p.self_collision.samples.min(50),
+            ..p.self_collision.clone()
+        },
         ..p.clone()
     }
 }
