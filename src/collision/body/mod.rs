@@ -85,17 +85,8 @@ pub fn bodies_free(
     placed: &Placed,
     near: &mut Vec<u32>,
 ) -> bool {
-    let eps = scene.clearance();
-    for b in 0..body.len() {
-        let (c, rad) = body.ball(frames, placed, b);
-        scene.near(&c, rad, eps, near);
-        for &k in near.iter() {
-            if body.obstacle_distance(scene, frames, placed, b, k as usize) <= eps {
-                return false;
-            }
-        }
-    }
-    self_free(body, frames, placed)
+    clear_of_obstacles(scene, body, frames, placed, 0..body.len(), near)
+        && self_free(body, frames, placed)
 }
 
 /// True when every solid of `body` (bodies after the capsule segments) is clear of every
@@ -107,8 +98,27 @@ pub fn solids_free(
     placed: &Placed,
     near: &mut Vec<u32>,
 ) -> bool {
+    clear_of_obstacles(
+        scene,
+        body,
+        frames,
+        placed,
+        body.segments()..body.len(),
+        near,
+    )
+}
+
+/// True when the bodies `bodies` are clear of every obstacle (distance `> ε`).
+fn clear_of_obstacles(
+    scene: &CollisionScene,
+    body: &RobotBody,
+    frames: &Frames,
+    placed: &Placed,
+    bodies: std::ops::Range<usize>,
+    near: &mut Vec<u32>,
+) -> bool {
     let eps = scene.clearance();
-    for b in body.segments()..body.len() {
+    for b in bodies {
         let (c, rad) = body.ball(frames, placed, b);
         scene.near(&c, rad, eps, near);
         for &k in near.iter() {
