@@ -440,7 +440,7 @@ fn best_json_replays_its_evaluation_and_records_the_recheck() {
     assert!(robust["candidates"].as_u64().unwrap() >= 1);
     assert!(best["robust_cost"].as_f64().unwrap() >= best["cost"].as_f64().unwrap() - 1e-12);
     assert!(best["stream"].as_u64().is_some());
-    assert_eq!(best["planner"]["checker"], "segment");
+    assert_eq!(best["planner"]["checker"], "certified");
 
     // reach without --seed replays the producing evaluation: same R and paths as reach.json.
     let replay = dir.path().join("replay.json");
