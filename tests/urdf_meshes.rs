@@ -127,7 +127,7 @@ fn the_mesh_arm_imports_with_its_meshes_as_bodies() {
         (a.mins, a.maxs)
     };
     chain.fk(chain.home(), &mut frames);
-    body.place(chain, &frames, &mut placed);
+    body.place(&frames, &mut placed);
     let (mn, mx) = world_box(&placed, 2);
     assert!(
         (mn.z - 0.17).abs() < 1e-6 && (mx.z - 0.67).abs() < 1e-6,
@@ -138,7 +138,7 @@ fn the_mesh_arm_imports_with_its_meshes_as_bodies() {
     q[0] = FRAC_PI_2; // joint 1 turns the wide block: x and y extents swap
     q[1] = FRAC_PI_2; // joint 2 lays it along +x, pivoting at z = 0.22
     chain.fk(&q, &mut frames);
-    body.place(chain, &frames, &mut placed);
+    body.place(&frames, &mut placed);
     let (mn, mx) = world_box(&placed, 2);
     assert!((mn.z - (0.22 - 0.09)).abs() < 1e-6, "{mn:?}");
     assert!((mx.z - (0.22 + 0.09)).abs() < 1e-6, "{mx:?}");
@@ -216,7 +216,7 @@ fn cluttered(body: &RobotBody, chain: &kinsynth::kinematics::Chain) -> Arc<Colli
     let mut frames = chain.frames();
     let mut placed = Default::default();
     chain.fk(chain.home(), &mut frames);
-    body.place(chain, &frames, &mut placed);
+    body.place(&frames, &mut placed);
     let mut obstacles = Vec::new();
     while obstacles.len() < 24 {
         let c = Point3::new(
@@ -648,7 +648,7 @@ fn merged_co_located_joints_carry_their_intermediate_links() {
     let mut frames = chain.frames();
     let mut placed = kinsynth::collision::body::Placed::default();
     chain.fk(&[qa, qb], &mut frames);
-    r.body.place(chain, &frames, &mut placed);
+    r.body.place(&frames, &mut placed);
     let rx = nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::x_axis(), qa);
     let ry = nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::y_axis(), qb);
     let o = nalgebra::Vector3::new(0.0, 0.0, 0.5);

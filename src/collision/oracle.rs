@@ -46,7 +46,7 @@ pub fn judge_edge(
             *qi = a + t * (b - a);
         }
         chain.fk(&q, &mut frames);
-        body.place(chain, &frames, &mut placed);
+        body.place(&frames, &mut placed);
         min_distance = min_distance.min(body.min_obstacle_distance(scene, &frames, &placed));
         min_self_distance = min_self_distance.min(body.min_self_distance(&frames, &placed));
         if min_distance <= scene.clearance() || min_self_distance <= 0.0 {
@@ -98,7 +98,7 @@ pub fn sample_edges(
         }
         let a = draw(&mut rng);
         chain.fk(&a, &mut fa);
-        body.place(chain, &fa, &mut placed);
+        body.place(&fa, &mut placed);
         if body.min_obstacle_distance(scene, &fa, &placed) <= scene.clearance()
             || body.min_self_distance(&fa, &placed) <= 0.0
         {

@@ -95,7 +95,7 @@ fn home_collision(scene: &CollisionScene, chain: &Chain, body: &RobotBody) -> St
     let mut frames = chain.frames();
     let mut placed = crate::collision::body::Placed::default();
     chain.fk(chain.home(), &mut frames);
-    body.place(chain, &frames, &mut placed);
+    body.place(&frames, &mut placed);
     for b in 0..body.len() {
         for (k, o) in scene.obstacles().iter().enumerate() {
             let d = body.obstacle_distance(scene, &frames, &placed, b, k);

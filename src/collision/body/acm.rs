@@ -188,7 +188,7 @@ impl AllowedCollisions {
         let mut frames = chain.frames();
         let mut placed = Placed::default();
         chain.fk(chain.home(), &mut frames);
-        body.place(chain, &frames, &mut placed);
+        body.place(&frames, &mut placed);
         // Contact between two groups; bounding balls cull pairs that are clearly apart.
         let contact = |frames: &_, placed: &_, i: usize, j: usize| -> bool {
             groups[i].bodies.iter().any(|&p| {
@@ -247,7 +247,7 @@ impl AllowedCollisions {
                 }
                 chain.sample_config(&mut rng, &mut q);
                 chain.fk(&q, &mut frames);
-                body.place(chain, &frames, &mut placed);
+                body.place(&frames, &mut placed);
                 for c in candidates.iter_mut() {
                     if contact(&frames, &placed, c.0, c.1) {
                         c.2 += 1;

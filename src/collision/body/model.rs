@@ -206,8 +206,8 @@ impl RobotBody {
         self.acm.pairs()
     }
 
-    /// Places the solids at the configuration whose frames are in `frames` (of `chain`).
-    pub fn place(&self, chain: &Chain, frames: &Frames, out: &mut Placed) {
+    /// Places the solids at the configuration whose frames are in `frames`.
+    pub fn place(&self, frames: &Frames, out: &mut Placed) {
         out.poses.clear();
         out.centers.clear();
         for s in &self.solids {
@@ -220,7 +220,6 @@ impl RobotBody {
             out.poses.push(to_parry_pose(&world));
             out.centers.push(carrier * s.center);
         }
-        let _ = chain;
     }
 
     /// Bounding ball of body `b` (centre, radius).

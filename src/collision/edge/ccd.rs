@@ -162,7 +162,7 @@ impl EdgeChecker for Ccd {
         let n = substeps(chain, &work.delta);
         stats.fk += 1;
         chain.fk(from, fa);
-        body.place(chain, fa, pa);
+        body.place(fa, pa);
         for i in 0..n {
             let t1 = (i + 1) as f64 / n as f64;
             for ((qi, a), b) in q.iter_mut().zip(from).zip(to) {
@@ -170,7 +170,7 @@ impl EdgeChecker for Ccd {
             }
             stats.fk += 1;
             chain.fk(q, fb);
-            body.place(chain, fb, pb);
+            body.place(fb, pb);
             motions(body, fa, fb, moving);
             for (b, m) in moving.iter().enumerate() {
                 let step_reach = work.reach[b] / n as f64;

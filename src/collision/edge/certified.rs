@@ -129,8 +129,8 @@ impl EdgeChecker for Certified {
         stats.fk += 2;
         chain.fk(from, fa);
         chain.fk(to, fb);
-        body.place(chain, fa, pa);
-        body.place(chain, fb, pb);
+        body.place(fa, pa);
+        body.place(fb, pb);
         for b in 0..body.len() {
             // Broad phase: the body's ball at the start, grown by how far it can move.
             let reach = work.reach[b];
@@ -213,7 +213,7 @@ impl EdgeChecker for Certified {
             }
             stats.fk += 1;
             chain.fk(q, fm);
-            body.place(chain, fm, pm);
+            body.place(fm, pm);
             let half = 0.5 * (iv.t1 - iv.t0);
             // Children: left [t0, tm] then right [tm, t1], appended after the parent's pairs.
             work.mid.clear();

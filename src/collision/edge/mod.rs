@@ -167,7 +167,7 @@ pub(crate) fn node_free_with(
     scratch.stats.nodes += 1;
     scratch.stats.fk += 1;
     chain.fk(a, &mut scratch.fa);
-    scratch.body.place(chain, &scratch.fa, &mut scratch.pa);
+    scratch.body.place(&scratch.fa, &mut scratch.pa);
     match body {
         BodyModel::Capsules => super::body::bodies_free(
             scene,

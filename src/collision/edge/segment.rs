@@ -95,7 +95,7 @@ impl EdgeChecker for SegmentChecker {
             } else {
                 &*fb
             };
-            body.place(chain, frames, pm);
+            body.place(frames, pm);
             if !solids_free(scene, body, frames, pm, near) || !self_free(body, frames, pm) {
                 return false;
             }
