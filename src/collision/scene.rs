@@ -1,11 +1,14 @@
 //! The obstacles as the edge checkers see them: exact distances with closed forms where the
-//! shape allows, parry elsewhere, and bounding-sphere culling as the broad phase.
+//! shape allows, parry elsewhere, and a bounding-volume hierarchy (parry's [`Bvh`] over the
+//! obstacles' bounding boxes) as the broad phase, so that a query costs what the obstacles near
+//! the body cost, not what all of them cost.
 
 use super::distance::{point_segment, segment_segment};
 use crate::world::convert::{from_parry_point, to_parry_point};
 use crate::world::{Obstacle, ObstacleShape, Workspace};
 use nalgebra::Point3;
 use parry3d_f64::math::Pose;
+use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy, BvhNode, TraversalAction};
 use parry3d_f64::query;
 use parry3d_f64::shape::{Ball, Segment};
 
@@ -24,7 +27,8 @@ enum Exact {
     General,
 }
 
-/// Obstacles, clearance, and a per-obstacle bounding sphere for culling.
+/// Obstacles, clearance, a per-obstacle bounding sphere and a hierarchy of their bounding boxes
+/// for culling.
 ///
 /// Distances between the robot's parts (capsules: a segment and a radius; point colliders are
 /// zero-length capsules) and the obstacles are *signed* where the closed forms allow (negative
@@ -35,7 +39,18 @@ pub struct CollisionScene {
     obstacles: Vec<Obstacle>,
     exact: Vec<Exact>,
     bounds: Vec<(Point3<f64>, f64)>,
+    bvh: Bvh,
     clearance: f64,
+}
+
+/// Squared distance from `p` to the bounding box of a hierarchy node (0 inside).
+#[inline]
+fn node_distance_squared(node: &BvhNode, p: &Point3<f64>) -> f64 {
+    let (lo, hi) = (node.mins(), node.maxs());
+    let dx = (lo.x - p.x).max(p.x - hi.x).max(0.0);
+    let dy = (lo.y - p.y).max(p.y - hi.y).max(0.0);
+    let dz = (lo.z - p.z).max(p.z - hi.z).max(0.0);
+    dx * dx + dy * dy + dz * dz
 }
 
 impl CollisionScene {
@@ -44,6 +59,11 @@ impl CollisionScene {
         let obstacles = workspace.obstacles.clone();
         let mut exact = Vec::with_capacity(obstacles.len());
         let mut bounds = Vec::with_capacity(obstacles.len());
+        let boxes: Vec<_> = obstacles
+            .iter()
+            .map(|o| o.shape().compute_aabb(o.pose()))
+            .collect();
+        let bvh = Bvh::from_leaves(BvhBuildStrategy::Binned, &boxes);
         for o in &obstacles {
             let bs = o.shape().compute_bounding_sphere(o.pose());
             bounds.push((from_parry_point(bs.center()), bs.radius()));
@@ -67,6 +87,7 @@ impl CollisionScene {
             obstacles,
             exact,
             bounds,
+            bvh,
             clearance: workspace.clearance,
         }
     }
@@ -91,17 +112,61 @@ impl CollisionScene {
         self.obstacles.is_empty()
     }
 
-    /// The obstacles whose bounding sphere comes within `margin` of the ball (`center`,
-    /// `radius`): the broad phase. Indices are written to `out` (cleared first).
+    /// The obstacles whose bounding box and bounding sphere come within `margin` of the ball
+    /// (`center`, `radius`): the broad phase. Indices are written to `out` (cleared first), in
+    /// a fixed order for a given scene.
     #[inline]
     pub fn near(&self, center: &Point3<f64>, radius: f64, margin: f64, out: &mut Vec<u32>) {
         out.clear();
-        for (k, (c, r)) in self.bounds.iter().enumerate() {
-            let reach = radius + r + margin;
-            if (c - center).norm_squared() < reach * reach {
-                out.push(k as u32);
-            }
+        let reach = radius + margin;
+        if reach.is_nan() {
+            return;
         }
+        let reach2 = reach * reach;
+        self.bvh.traverse(|node| {
+            if node_distance_squared(node, center) >= reach2 {
+                return TraversalAction::Prune;
+            }
+            if let Some(k) = node.leaf_data() {
+                let (c, r) = &self.bounds[k as usize];
+                let rr = reach + r;
+                if (c - center).norm_squared() < rr * rr {
+                    out.push(k);
+                }
+            }
+            TraversalAction::Continue
+        });
+    }
+
+    /// `min(cap, min_k dist(k))` over the obstacles `k`, where `dist(k)` is a distance from a
+    /// body inside the ball (`center`, `radius`) to obstacle `k`: a best-first search of the
+    /// hierarchy that skips every obstacle whose bounding box is farther from the ball than the
+    /// best distance so far. The result is exact when it is below `cap`, and a lower bound of
+    /// every obstacle's distance in any case.
+    #[inline]
+    pub fn nearest(
+        &self,
+        center: &Point3<f64>,
+        radius: f64,
+        cap: f64,
+        dist: impl Fn(usize) -> f64,
+    ) -> f64 {
+        if self.obstacles.is_empty() || cap.is_nan() {
+            return cap;
+        }
+        let box_cost =
+            |node: &BvhNode, _best: f64| node_distance_squared(node, center).sqrt() - radius;
+        let leaf_cost = |k: u32, best: f64| {
+            let k = k as usize;
+            let (c, r) = &self.bounds[k];
+            if (c - center).norm() - r - radius >= best {
+                return None;
+            }
+            Some(dist(k))
+        };
+        self.bvh
+            .find_best(cap, box_cost, leaf_cost)
+            .map_or(cap, |(_, d)| d.min(cap))
     }
 
     /// A lower bound of the distance between the capsule (`a`–`b`, `radius`) and obstacle `k`,

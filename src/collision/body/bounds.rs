@@ -72,6 +72,26 @@ impl MotionBounds {
             .sum()
     }
 
+    /// Writes, for body `b` and the step `delta`, the suffix sums `Σ_{j ≥ i} w_bj·|Δa_j|` for
+    /// `i = 0 … dof` to `out` (appended; `dof + 1` values, the last 0): entry 0 is
+    /// [`MotionBounds::displacement`] and entry `i` is [`MotionBounds::relative`] from level `i`.
+    #[inline]
+    pub fn suffix_sums(&self, b: usize, delta: &[f64], out: &mut Vec<f64>) {
+        let row = &self.w[b * self.dof..(b + 1) * self.dof];
+        let start = out.len();
+        out.resize(start + self.dof + 1, 0.0);
+        let mut acc = 0.0;
+        for j in (0..self.dof).rev() {
+            acc += row[j] * delta[j].abs();
+            out[start + j] = acc;
+        }
+    }
+
+    /// Number of free axes covered.
+    pub fn dof(&self) -> usize {
+        self.dof
+    }
+
     /// Number of bodies covered.
     pub fn bodies(&self) -> usize {
         self.bodies

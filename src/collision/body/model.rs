@@ -258,6 +258,32 @@ impl RobotBody {
         }
     }
 
+    /// Bounding balls of every body at one configuration, written to `out` (cleared first).
+    #[inline]
+    pub fn balls(&self, frames: &Frames, placed: &Placed, out: &mut Vec<(Point3<f64>, f64)>) {
+        out.clear();
+        out.extend((0..self.len()).map(|b| self.ball(frames, placed, b)));
+    }
+
+    /// Clearance of body `b` (bounding ball `ball`) from the obstacles: `min(cap, min_k
+    /// distance(b, k) − ε)`, exact when below `cap` and never above the true clearance
+    /// ([`CollisionScene::nearest`]). `≤ 0` is a collision.
+    #[inline]
+    pub fn clearance(
+        &self,
+        scene: &CollisionScene,
+        frames: &Frames,
+        placed: &Placed,
+        b: usize,
+        ball: &(Point3<f64>, f64),
+        cap: f64,
+    ) -> f64 {
+        let eps = scene.clearance();
+        scene.nearest(&ball.0, ball.1, cap + eps, |k| {
+            self.obstacle_distance(scene, frames, placed, b, k)
+        }) - eps
+    }
+
     /// A lower bound of the distance between body `b` and obstacle `k` from their bounding
     /// spheres.
     #[inline]

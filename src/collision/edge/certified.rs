@@ -30,18 +30,22 @@ use super::{EdgeChecker, Scratch};
 use crate::collision::body::{BodyModel, MotionBounds};
 use crate::collision::scene::CollisionScene;
 use crate::kinematics::Chain;
+use nalgebra::Point3;
 use std::sync::Arc;
 
 /// Bisection depth after which an unproven interval (length `2^-MAX_DEPTH`) counts as blocked.
 pub const MAX_DEPTH: u32 = 30;
 
-/// An unproven pair with the clearances at both ends of its interval: a body and an obstacle,
-/// or two bodies (`other` is then a body index and `self_pair` is set).
+/// `Item::other` of a body's clearance from the whole environment.
+const ENV: u32 = u32::MAX;
+
+/// An unproven item with the clearances at both ends of its interval: a body against the whole
+/// environment (`other == ENV`; the clearance is the distance to the nearest obstacle minus
+/// `ε`), or a self pair of two bodies (`other` is then the second body).
 #[derive(Clone, Copy, Debug)]
-struct Pair {
+struct Item {
     body: u32,
     other: u32,
-    self_pair: bool,
     reach: f64,
     c0: f64,
     c1: f64,
@@ -61,7 +65,11 @@ struct Interval {
 pub(crate) struct Work {
     pub(crate) delta: Vec<f64>,
     pub(crate) reach: Vec<f64>,
-    pairs: Vec<Pair>,
+    /// Per body, the `dof + 1` suffix sums of its motion bound ([`MotionBounds::suffix_sums`]).
+    suffix: Vec<f64>,
+    balls_a: Vec<(Point3<f64>, f64)>,
+    balls_b: Vec<(Point3<f64>, f64)>,
+    items: Vec<Item>,
     mid: Vec<f64>,
     stack: Vec<Interval>,
 }
@@ -73,11 +81,24 @@ impl Work {
         self.delta.clear();
         self.delta.extend(to.iter().zip(from).map(|(b, a)| b - a));
         self.reach.clear();
-        let delta = &self.delta;
-        self.reach
-            .extend((0..bounds.bodies()).map(|b| bounds.displacement(b, delta)));
+        self.suffix.clear();
+        let stride = bounds.dof() + 1;
+        for b in 0..bounds.bodies() {
+            bounds.suffix_sums(b, &self.delta, &mut self.suffix);
+            self.reach.push(self.suffix[b * stride]);
+        }
+    }
+
+    /// Bound on how far body `q` moves relative to bodies moved by the first `level` axes.
+    #[inline]
+    fn relative(&self, dof: usize, q: usize, level: usize) -> f64 {
+        self.suffix[q * (dof + 1) + level.min(dof)]
     }
 }
+
+/// Margin added to the distance a capped clearance query must exceed, so that a capped answer
+/// proves the strict inequality it is asked for.
+const CAP_MARGIN: f64 = 1e-12;
 
 /// The certified checker: conservative advancement over every robot body, against the
 /// obstacles and over the checked self pairs.
@@ -105,7 +126,6 @@ impl EdgeChecker for Certified {
     fn edge_free(&self, chain: &Chain, from: &[f64], to: &[f64], scratch: &mut Scratch) -> bool {
         scratch.stats.edges += 1;
         let scene = &*self.scene;
-        let eps = scene.clearance();
         let Scratch {
             fa,
             fb,
@@ -114,7 +134,6 @@ impl EdgeChecker for Certified {
             bounds,
             certified: work,
             stats,
-            near,
             body,
             pa,
             pb,
@@ -122,8 +141,9 @@ impl EdgeChecker for Certified {
             ..
         } = scratch;
         let body = &**body;
+        let dof = bounds.dof();
         work.prepare(bounds, from, to);
-        work.pairs.clear();
+        work.items.clear();
         work.stack.clear();
 
         stats.fk += 2;
@@ -131,42 +151,40 @@ impl EdgeChecker for Certified {
         chain.fk(to, fb);
         body.place(fa, pa);
         body.place(fb, pb);
+        body.balls(fa, pa, &mut work.balls_a);
+        body.balls(fb, pb, &mut work.balls_b);
+        // Each body against the environment: c(t) = clearance − ε moves no faster than the
+        // body. c0 > D proves the whole step; otherwise c1 > D − c0 does.
         for b in 0..body.len() {
-            // Broad phase: the body's ball at the start, grown by how far it can move.
             let reach = work.reach[b];
-            let (c, rad) = body.ball(fa, pa, b);
-            scene.near(&c, rad, eps + reach, near);
-            for &k in near.iter() {
-                let k = k as usize;
-                let c0 = body.obstacle_distance(scene, fa, pa, b, k) - eps;
-                if c0 <= 0.0 {
-                    return false;
-                }
-                if c0 > reach {
-                    continue;
-                }
-                let c1 = body.obstacle_distance(scene, fb, pb, b, k) - eps;
-                if c1 <= 0.0 {
-                    return false;
-                }
-                if c0 + c1 > reach {
-                    continue;
-                }
-                work.pairs.push(Pair {
-                    body: b as u32,
-                    other: k as u32,
-                    self_pair: false,
-                    reach,
-                    c0,
-                    c1,
-                });
+            let c0 = body.clearance(scene, fa, pa, b, &work.balls_a[b], reach + CAP_MARGIN);
+            if c0 <= 0.0 {
+                return false;
             }
+            if c0 > reach {
+                continue;
+            }
+            let need = (reach - c0).max(0.0) + CAP_MARGIN;
+            let c1 = body.clearance(scene, fb, pb, b, &work.balls_b[b], need);
+            if c1 <= 0.0 {
+                return false;
+            }
+            if c0 + c1 > reach {
+                continue;
+            }
+            work.items.push(Item {
+                body: b as u32,
+                other: ENV,
+                reach,
+                c0,
+                c1,
+            });
         }
         for &(p, qb) in body.self_pairs() {
             let (p, qb) = (p as usize, qb as usize);
-            let reach = bounds.relative(qb, body.level(p), &work.delta);
-            let (cp, rp) = body.ball(fa, pa, p);
-            let (cq, rq) = body.ball(fa, pa, qb);
+            let reach = work.relative(dof, qb, body.level(p));
+            let (cp, rp) = work.balls_a[p];
+            let (cq, rq) = work.balls_a[qb];
             if (cp - cq).norm() - rp - rq > reach {
                 continue;
             }
@@ -184,23 +202,22 @@ impl EdgeChecker for Certified {
             if c0 + c1 > reach {
                 continue;
             }
-            work.pairs.push(Pair {
+            work.items.push(Item {
                 body: p as u32,
                 other: qb as u32,
-                self_pair: true,
                 reach,
                 c0,
                 c1,
             });
         }
-        if work.pairs.is_empty() {
+        if work.items.is_empty() {
             return true;
         }
         work.stack.push(Interval {
             t0: 0.0,
             t1: 1.0,
             start: 0,
-            len: work.pairs.len(),
+            len: work.items.len(),
             depth: 0,
         });
         while let Some(iv) = work.stack.pop() {
@@ -215,35 +232,39 @@ impl EdgeChecker for Certified {
             chain.fk(q, fm);
             body.place(fm, pm);
             let half = 0.5 * (iv.t1 - iv.t0);
-            // Children: left [t0, tm] then right [tm, t1], appended after the parent's pairs.
+            // Children: left [t0, tm] then right [tm, t1], appended after the parent's items.
             work.mid.clear();
             for i in iv.start..iv.start + iv.len {
-                let p = work.pairs[i];
-                let cm = if p.self_pair {
-                    body.pair_distance(fm, pm, p.body as usize, p.other as usize)
+                let it = work.items[i];
+                let b = it.body as usize;
+                let cm = if it.other == ENV {
+                    // Both children are proven once cm exceeds this.
+                    let need = (half * it.reach - it.c0.min(it.c1)).max(0.0) + CAP_MARGIN;
+                    let ball = body.ball(fm, pm, b);
+                    body.clearance(scene, fm, pm, b, &ball, need)
                 } else {
-                    body.obstacle_distance(scene, fm, pm, p.body as usize, p.other as usize) - eps
+                    body.pair_distance(fm, pm, b, it.other as usize)
                 };
                 if cm <= 0.0 {
                     return false;
                 }
                 work.mid.push(cm);
             }
-            let left_start = work.pairs.len();
+            let left_start = work.items.len();
             for (i, &cm) in (iv.start..iv.start + iv.len).zip(&work.mid) {
-                let p = work.pairs[i];
-                if p.c0 + cm <= half * p.reach {
-                    work.pairs.push(Pair { c1: cm, ..p });
+                let it = work.items[i];
+                if it.c0 + cm <= half * it.reach {
+                    work.items.push(Item { c1: cm, ..it });
                 }
             }
-            let right_start = work.pairs.len();
+            let right_start = work.items.len();
             for (i, &cm) in (iv.start..iv.start + iv.len).zip(&work.mid) {
-                let p = work.pairs[i];
-                if cm + p.c1 <= half * p.reach {
-                    work.pairs.push(Pair { c0: cm, ..p });
+                let it = work.items[i];
+                if cm + it.c1 <= half * it.reach {
+                    work.items.push(Item { c0: cm, ..it });
                 }
             }
-            let end = work.pairs.len();
+            let end = work.items.len();
             if end > right_start {
                 work.stack.push(Interval {
                     t0: tm,
