@@ -138,25 +138,31 @@ impl CollisionScene {
         });
     }
 
-    /// `min(cap, min_k dist(k))` over the obstacles `k`, where `dist(k)` is a distance from a
-    /// body inside the ball (`center`, `radius`) to obstacle `k`: a best-first search of the
-    /// hierarchy that skips every obstacle whose bounding box is farther from the ball than the
-    /// best distance so far. The result is exact when it is below `cap`, and a lower bound of
-    /// every obstacle's distance in any case.
+    /// `(min(cap, min_k dist(k)), nearest)` over the obstacles `k`, where `dist(k)` is a
+    /// distance from a body inside the ball (`center`, `radius`) to obstacle `k`: a best-first
+    /// search of the hierarchy that skips every obstacle whose bounding box is farther from the
+    /// ball than the best distance so far. The distance is exact when it is below `cap`, and a
+    /// lower bound of every obstacle's distance in any case; `nearest` is the obstacle found
+    /// below `cap` (`u32::MAX` if none). Obstacle `skip` is left out (its distance is already
+    /// in `cap`; pass `u32::MAX` to search all).
     #[inline]
     pub fn nearest(
         &self,
         center: &Point3<f64>,
         radius: f64,
         cap: f64,
+        skip: u32,
         dist: impl Fn(usize) -> f64,
-    ) -> f64 {
+    ) -> (f64, u32) {
         if self.obstacles.is_empty() || cap.is_nan() {
-            return cap;
+            return (cap, u32::MAX);
         }
         let box_cost =
             |node: &BvhNode, _best: f64| node_distance_squared(node, center).sqrt() - radius;
         let leaf_cost = |k: u32, best: f64| {
+            if k == skip {
+                return None;
+            }
             let k = k as usize;
             let (c, r) = &self.bounds[k];
             if (c - center).norm() - r - radius >= best {
@@ -166,7 +172,7 @@ impl CollisionScene {
         };
         self.bvh
             .find_best(cap, box_cost, leaf_cost)
-            .map_or(cap, |(_, d)| d.min(cap))
+            .map_or((cap, u32::MAX), |(k, d)| (d.min(cap), k))
     }
 
     /// A lower bound of the distance between the capsule (`a`–`b`, `radius`) and obstacle `k`,

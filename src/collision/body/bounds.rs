@@ -19,6 +19,9 @@ pub struct MotionBounds {
     bodies: usize,
     dof: usize,
     w: Vec<f64>,
+    /// Per free axis: the column of its frame's rotation that is the axis direction, for a
+    /// rotation; `None` for a translation.
+    rotation: Vec<Option<usize>>,
 }
 
 impl MotionBounds {
@@ -50,7 +53,17 @@ impl MotionBounds {
                 };
             }
         }
-        MotionBounds { bodies: n, dof, w }
+        let rotation = chain
+            .free_axes()
+            .iter()
+            .map(|a| a.axis.is_rotation().then(|| a.axis.index()))
+            .collect();
+        MotionBounds {
+            bodies: n,
+            dof,
+            w,
+            rotation,
+        }
     }
 
     /// Bound on how far any point of body `b` moves for the step `delta`.
@@ -85,6 +98,20 @@ impl MotionBounds {
             acc += row[j] * delta[j].abs();
             out[start + j] = acc;
         }
+    }
+
+    /// The factors `w_bj` of body `b`, one per free axis (0 for the axes that do not move it).
+    #[inline]
+    pub fn factors(&self, b: usize) -> &[f64] {
+        &self.w[b * self.dof..(b + 1) * self.dof]
+    }
+
+    /// For free axis `j`: the column of the rotation of the frame after it
+    /// ([`crate::kinematics::Frames::axis_frames`]) that is its direction, when it is a
+    /// rotation; `None` for a translation.
+    #[inline]
+    pub fn rotation_column(&self, j: usize) -> Option<usize> {
+        self.rotation[j]
     }
 
     /// Number of free axes covered.

@@ -267,7 +267,11 @@ impl RobotBody {
 
     /// Clearance of body `b` (bounding ball `ball`) from the obstacles: `min(cap, min_k
     /// distance(b, k) − ε)`, exact when below `cap` and never above the true clearance
-    /// ([`CollisionScene::nearest`]). `≤ 0` is a collision.
+    /// ([`CollisionScene::nearest`]), with the nearest obstacle when it is below `cap`
+    /// (`u32::MAX` otherwise). `hint` (an obstacle index, or `u32::MAX`) is tried first: the
+    /// obstacle nearest at a close-by configuration prunes the search best. `≤ 0` is a
+    /// collision.
+    #[allow(clippy::too_many_arguments)]
     #[inline]
     pub fn clearance(
         &self,
@@ -277,11 +281,22 @@ impl RobotBody {
         b: usize,
         ball: &(Point3<f64>, f64),
         cap: f64,
-    ) -> f64 {
+        hint: u32,
+    ) -> (f64, u32) {
         let eps = scene.clearance();
-        scene.nearest(&ball.0, ball.1, cap + eps, |k| {
+        let mut cap = cap + eps;
+        let mut best = u32::MAX;
+        if (hint as usize) < scene.len() {
+            let d = self.obstacle_distance(scene, frames, placed, b, hint as usize);
+            if d < cap {
+                cap = d;
+                best = hint;
+            }
+        }
+        let (d, k) = scene.nearest(&ball.0, ball.1, cap, hint, |k| {
             self.obstacle_distance(scene, frames, placed, b, k)
-        }) - eps
+        });
+        (d - eps, if k == u32::MAX { best } else { k })
     }
 
     /// A lower bound of the distance between body `b` and obstacle `k` from their bounding

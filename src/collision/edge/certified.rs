@@ -27,9 +27,9 @@
 //! and capsules, parry's GJK otherwise).
 
 use super::{EdgeChecker, Scratch};
-use crate::collision::body::{BodyModel, MotionBounds};
+use crate::collision::body::{BodyModel, MotionBounds, Placed, RobotBody};
 use crate::collision::scene::CollisionScene;
-use crate::kinematics::Chain;
+use crate::kinematics::{Chain, Frames};
 use nalgebra::Point3;
 use std::sync::Arc;
 
@@ -46,6 +46,9 @@ const ENV: u32 = u32::MAX;
 struct Item {
     body: u32,
     other: u32,
+    /// For a body against the environment: the obstacle found nearest last (`u32::MAX` if
+    /// none), tried first at the next configuration.
+    hint: u32,
     reach: f64,
     c0: f64,
     c1: f64,
@@ -70,6 +73,9 @@ pub(crate) struct Work {
     balls_a: Vec<(Point3<f64>, f64)>,
     balls_b: Vec<(Point3<f64>, f64)>,
     items: Vec<Item>,
+    /// Lever arms `ρ_qj` per body and axis at the configuration numbered `lever_pose[q]`.
+    lever: Vec<f64>,
+    lever_pose: Vec<u32>,
     mid: Vec<f64>,
     stack: Vec<Interval>,
 }
@@ -87,12 +93,76 @@ impl Work {
             bounds.suffix_sums(b, &self.delta, &mut self.suffix);
             self.reach.push(self.suffix[b * stride]);
         }
+        self.lever.resize(bounds.bodies() * bounds.dof(), 0.0);
+        self.lever_pose.clear();
+        self.lever_pose.resize(bounds.bodies(), u32::MAX);
     }
 
     /// Bound on how far body `q` moves relative to bodies moved by the first `level` axes.
     #[inline]
     fn relative(&self, dof: usize, q: usize, level: usize) -> f64 {
         self.suffix[q * (dof + 1) + level.min(dof)]
+    }
+}
+
+impl Work {
+    /// A tighter bound, over an interval of length `span` that has the configuration of
+    /// `frames`/`placed` at one end, on how far body `q` moves relative to bodies moved by the
+    /// first `from` axes. A rotation axis `j` moves a point `p` at speed `|ω̂_j × (p − o_j)|·|Δa_j|`,
+    /// the point's distance from the axis line times the rate. That distance is known at the
+    /// end of the interval (largest at a capsule's end points, plus its radius; a solid's
+    /// bounding sphere), and changes no faster than the body moves relative to the axis line,
+    /// that is by the axes after `j` (their suffix sum): so over the interval it stays below
+    /// `ρ_j + span·Σ_{k > j} w_qk·|Δa_k|`, and below `w_qj` in any case.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn local_reach(
+        &mut self,
+        bounds: &MotionBounds,
+        body: &RobotBody,
+        frames: &Frames,
+        placed: &Placed,
+        pose: u32,
+        q: usize,
+        from: usize,
+        span: f64,
+    ) -> f64 {
+        let dof = bounds.dof();
+        let level = body.level(q).min(dof);
+        if self.lever_pose[q] != pose {
+            // The lever arms of body q about every axis moving it, at this configuration.
+            self.lever_pose[q] = pose;
+            let ns = body.segments();
+            let (p0, p1, extent) = if q < ns {
+                let [a, b] = frames.segments[q];
+                (a, b, body.radius(q))
+            } else {
+                let c = placed.centers[q - ns];
+                (c, c, body.solids()[q - ns].radius)
+            };
+            let levers = &mut self.lever[q * dof..q * dof + level];
+            for (j, rho) in levers.iter_mut().enumerate() {
+                *rho = match bounds.rotation_column(j) {
+                    Some(col) => {
+                        let f = &frames.axis_frames[j];
+                        let o = Point3::from(f.translation.vector);
+                        let axis = f.rotation.matrix().column(col);
+                        let r0 = axis.cross(&(p0 - o)).norm_squared();
+                        let r1 = axis.cross(&(p1 - o)).norm_squared();
+                        r0.max(r1).sqrt() + extent
+                    }
+                    None => f64::INFINITY,
+                };
+            }
+        }
+        let w = bounds.factors(q);
+        let suffix = &self.suffix[q * (dof + 1)..(q + 1) * (dof + 1)];
+        let levers = &self.lever[q * dof..q * dof + level];
+        let mut total = 0.0;
+        for j in from..level {
+            total += self.delta[j].abs() * w[j].min(levers[j] + span * suffix[j + 1]);
+        }
+        total
     }
 }
 
@@ -156,16 +226,28 @@ impl EdgeChecker for Certified {
         // Each body against the environment: c(t) = clearance − ε moves no faster than the
         // body. c0 > D proves the whole step; otherwise c1 > D − c0 does.
         for b in 0..body.len() {
-            let reach = work.reach[b];
-            let c0 = body.clearance(scene, fa, pa, b, &work.balls_a[b], reach + CAP_MARGIN);
+            let plain = work.reach[b];
+            let (c0, hint) = body.clearance(
+                scene,
+                fa,
+                pa,
+                b,
+                &work.balls_a[b],
+                plain + CAP_MARGIN,
+                u32::MAX,
+            );
             if c0 <= 0.0 {
                 return false;
             }
+            if c0 > plain {
+                continue;
+            }
+            let reach = plain.min(work.local_reach(bounds, body, fa, pa, 0, b, 0, 1.0));
             if c0 > reach {
                 continue;
             }
             let need = (reach - c0).max(0.0) + CAP_MARGIN;
-            let c1 = body.clearance(scene, fb, pb, b, &work.balls_b[b], need);
+            let (c1, hint) = body.clearance(scene, fb, pb, b, &work.balls_b[b], need, hint);
             if c1 <= 0.0 {
                 return false;
             }
@@ -175,6 +257,7 @@ impl EdgeChecker for Certified {
             work.items.push(Item {
                 body: b as u32,
                 other: ENV,
+                hint,
                 reach,
                 c0,
                 c1,
@@ -182,16 +265,21 @@ impl EdgeChecker for Certified {
         }
         for &(p, qb) in body.self_pairs() {
             let (p, qb) = (p as usize, qb as usize);
-            let reach = work.relative(dof, qb, body.level(p));
+            let plain = work.relative(dof, qb, body.level(p));
             let (cp, rp) = work.balls_a[p];
             let (cq, rq) = work.balls_a[qb];
-            if (cp - cq).norm() - rp - rq > reach {
+            if (cp - cq).norm() - rp - rq > plain {
                 continue;
             }
             let c0 = body.pair_distance(fa, pa, p, qb);
             if c0 <= 0.0 {
                 return false;
             }
+            if c0 > plain {
+                continue;
+            }
+            let reach =
+                plain.min(work.local_reach(bounds, body, fa, pa, 0, qb, body.level(p), 1.0));
             if c0 > reach {
                 continue;
             }
@@ -205,6 +293,7 @@ impl EdgeChecker for Certified {
             work.items.push(Item {
                 body: p as u32,
                 other: qb as u32,
+                hint: u32::MAX,
                 reach,
                 c0,
                 c1,
@@ -213,6 +302,7 @@ impl EdgeChecker for Certified {
         if work.items.is_empty() {
             return true;
         }
+        let mut pose = 0u32;
         work.stack.push(Interval {
             t0: 0.0,
             t1: 1.0,
@@ -229,39 +319,64 @@ impl EdgeChecker for Certified {
                 *qi = a + tm * d;
             }
             stats.fk += 1;
+            pose += 1;
             chain.fk(q, fm);
             body.place(fm, pm);
             let half = 0.5 * (iv.t1 - iv.t0);
             // Children: left [t0, tm] then right [tm, t1], appended after the parent's items.
+            // Per item: the clearance at tm and the children's motion bound, tightened with
+            // the lever arms at tm.
             work.mid.clear();
             for i in iv.start..iv.start + iv.len {
                 let it = work.items[i];
                 let b = it.body as usize;
-                let cm = if it.other == ENV {
-                    // Both children are proven once cm exceeds this.
-                    let need = (half * it.reach - it.c0.min(it.c1)).max(0.0) + CAP_MARGIN;
-                    let ball = body.ball(fm, pm, b);
-                    body.clearance(scene, fm, pm, b, &ball, need)
+                let (q, from) = if it.other == ENV {
+                    (b, 0)
                 } else {
-                    body.pair_distance(fm, pm, b, it.other as usize)
+                    (it.other as usize, body.level(b))
+                };
+                let reach = it
+                    .reach
+                    .min(work.local_reach(bounds, body, fm, pm, pose, q, from, half));
+                let (cm, hint) = if it.other == ENV {
+                    // Both children are proven once cm exceeds this.
+                    let need = (half * reach - it.c0.min(it.c1)).max(0.0) + CAP_MARGIN;
+                    let ball = body.ball(fm, pm, b);
+                    body.clearance(scene, fm, pm, b, &ball, need, it.hint)
+                } else {
+                    (body.pair_distance(fm, pm, b, it.other as usize), u32::MAX)
                 };
                 if cm <= 0.0 {
                     return false;
                 }
                 work.mid.push(cm);
+                work.mid.push(reach);
+                work.mid.push(f64::from(hint));
             }
             let left_start = work.items.len();
-            for (i, &cm) in (iv.start..iv.start + iv.len).zip(&work.mid) {
+            for (i, m) in (iv.start..iv.start + iv.len).zip(work.mid.chunks_exact(3)) {
+                let (cm, reach, hint) = (m[0], m[1], m[2] as u32);
                 let it = work.items[i];
-                if it.c0 + cm <= half * it.reach {
-                    work.items.push(Item { c1: cm, ..it });
+                if it.c0 + cm <= half * reach {
+                    work.items.push(Item {
+                        c1: cm,
+                        reach,
+                        hint,
+                        ..it
+                    });
                 }
             }
             let right_start = work.items.len();
-            for (i, &cm) in (iv.start..iv.start + iv.len).zip(&work.mid) {
+            for (i, m) in (iv.start..iv.start + iv.len).zip(work.mid.chunks_exact(3)) {
+                let (cm, reach, hint) = (m[0], m[1], m[2] as u32);
                 let it = work.items[i];
-                if cm + it.c1 <= half * it.reach {
-                    work.items.push(Item { c0: cm, ..it });
+                if cm + it.c1 <= half * reach {
+                    work.items.push(Item {
+                        c0: cm,
+                        reach,
+                        hint,
+                        ..it
+                    });
                 }
             }
             let end = work.items.len();
