@@ -20,6 +20,10 @@ fn reach(c: &mut Criterion) {
         .unwrap();
         let chain = s.space.largest().chain();
         let scene = Arc::new(CollisionScene::new(&s.workspace));
+        // The robot body with its allowed-collision matrix, built once per reachability call.
+        c.bench_function(&format!("body/{name}"), |b| {
+            b.iter(|| black_box(kinsynth::collision::RobotBody::of_chain(&chain)))
+        });
         for checker in [CheckerKind::Segment, CheckerKind::Certified] {
             let mut config = s.planner.clone();
             config.checker = checker;

@@ -16,15 +16,29 @@
 //! only through the joints between them, so a self pair `(p, q)` uses the relative bound
 //! `D_pq = Σ_{level(p) ≤ j < level(q)} w_qj·|Δa_j|`.
 //!
-//! The distance from a body to an obstacle (or to another body) changes no faster than their
-//! relative motion, so with `c(t)` = distance − `ε` (0 for self pairs),
-//! `c(t) ≥ c(t0) − (t − t0)·D` and `c(t) ≥ c(t1) − (t1 − t)·D`. If `c(t) ≤ 0` somewhere in the
-//! interval, both give `c(t0) + c(t1) ≤ (t1 − t0)·D`. So the pair is proven free on `[t0, t1]`
-//! when `c(t0) > 0`, `c(t1) > 0` and `c(t0) + c(t1) > (t1 − t0)·D`. Pairs not proven free are bisected; a negative clearance at a
-//! bisection point is a real collision (the edge is blocked), and an interval still unproven
-//! after [`MAX_DEPTH`] halvings (a grazing contact) counts as blocked too. Every answer "free"
-//! is therefore a proof, up to the accuracy of the distance queries (closed forms for spheres
-//! and capsules, parry's GJK otherwise).
+//! The bound is tightened from the configuration itself: a rotation axis `j` moves a point at
+//! speed `|ω̂_j × (p − o_j)|·|Δa_j|`, the point's distance from the axis *line*. At an evaluated
+//! configuration that distance `ρ_bj` is known (largest at a capsule's end points), and it
+//! changes no faster than the axes after `j` move the body, so over an interval of length `s`
+//! with that configuration at one end the factor `w_bj` may be replaced by
+//! `min(w_bj, ρ_bj + s·Σ_{k > j} w_bk·|Δa_k|)`. Deep in the bisection, where `s` is small, this
+//! is close to the true lever arm.
+//!
+//! A body's clearance from the environment, `c(t)` = (distance to the nearest obstacle) − `ε`,
+//! and the distance between the two bodies of a self pair, change no faster than the bodies'
+//! (relative) motion `D`, so `c(t) ≥ c(t0) − (t − t0)·D` and `c(t) ≥ c(t1) − (t1 − t)·D`. If
+//! `c(t) ≤ 0` somewhere in the interval, both give `c(t0) + c(t1) ≤ (t1 − t0)·D`. So the item is
+//! proven free on `[t0, t1]` when `c(t0) > 0`, `c(t1) > 0` and `c(t0) + c(t1) > (t1 − t0)·D`.
+//! Items not proven free are bisected; a clearance `≤ 0` at a bisection point is a real
+//! collision (the edge is blocked), and an interval still unproven after [`MAX_DEPTH`] halvings
+//! (a grazing contact) counts as blocked too. Every answer "free" is therefore a proof, up to
+//! the accuracy of the distance queries (closed forms for spheres and capsules, parry's GJK
+//! otherwise).
+//!
+//! The clearance from the environment is one best-first query of the scene's bounding-volume
+//! hierarchy ([`CollisionScene::nearest`]), capped at the value that would prove the interval
+//! (anything farther is as good), and started from the obstacle found nearest at the previous
+//! configuration: its cost follows the obstacles near the body, not their number.
 
 use super::{EdgeChecker, Scratch};
 use crate::collision::body::{BodyModel, MotionBounds, Placed, RobotBody};
