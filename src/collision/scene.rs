@@ -246,3 +246,62 @@ impl CollisionScene {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Scenario;
+    use proptest::prelude::*;
+
+    fn scene() -> CollisionScene {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("examples/scenarios/paper-3d.toml");
+        CollisionScene::new(&Scenario::load(&path).unwrap().workspace)
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(300))]
+
+        /// The hierarchy's answers equal a brute-force scan over every obstacle.
+        #[test]
+        fn near_and_nearest_match_brute_force(
+            a in prop::array::uniform3(-2.5f64..2.5),
+            b in prop::array::uniform3(-2.5f64..2.5),
+            r in 0.0f64..0.2,
+            margin in 0.0f64..1.0,
+            cap in 0.0f64..3.0,
+        ) {
+            let s = scene();
+            let (a, b) = (Point3::from(a), Point3::from(b));
+            let center = nalgebra::center(&a, &b);
+            let radius = 0.5 * (b - a).norm() + r;
+            let mut got = Vec::new();
+            s.near(&center, radius, margin, &mut got);
+            got.sort_unstable();
+            let want: Vec<u32> = (0..s.len() as u32)
+                .filter(|&k| {
+                    let (c, rk) = &s.bounds[k as usize];
+                    (c - center).norm() < radius + rk + margin
+                })
+                .collect();
+            // The hierarchy also culls by bounding box, so it may only drop obstacles whose box
+            // is out of reach; none of them is within reach of the capsule itself.
+            for k in &got {
+                prop_assert!(want.contains(k));
+            }
+            for k in &want {
+                if !got.contains(k) {
+                    prop_assert!(s.distance(*k as usize, &a, &b, r) > margin);
+                }
+            }
+            let brute = (0..s.len()).map(|k| s.distance(k, &a, &b, r)).fold(f64::INFINITY, f64::min);
+            let (d, k) = s.nearest(&center, radius, cap, u32::MAX, |k| s.distance(k, &a, &b, r));
+            prop_assert!((d - brute.min(cap)).abs() < 1e-12, "{d} vs {brute} (cap {cap})");
+            if brute < cap {
+                prop_assert!((s.distance(k as usize, &a, &b, r) - brute).abs() < 1e-12);
+            } else {
+                prop_assert_eq!(k, u32::MAX);
+            }
+        }
+    }
+}
