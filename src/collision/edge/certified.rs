@@ -68,6 +68,40 @@ struct Item {
     c1: f64,
 }
 
+/// What the bisection point of an interval gives an item: its clearance there, the children's
+/// motion bound and the nearest obstacle found.
+#[derive(Clone, Copy, Debug)]
+struct Mid {
+    c: f64,
+    reach: f64,
+    hint: u32,
+}
+
+/// Appends, for each item of `parent` still unproven on one child of the interval (the left
+/// `[t0, tm]` when `left`, else the right `[tm, t1]`, each of length `half`), that item on the
+/// child, with the clearances at its two ends.
+fn push_children(
+    items: &mut Vec<Item>,
+    parent: std::ops::Range<usize>,
+    mid: &[Mid],
+    half: f64,
+    left: bool,
+) {
+    for (i, m) in parent.zip(mid) {
+        let it = items[i];
+        let (c0, c1) = if left { (it.c0, m.c) } else { (m.c, it.c1) };
+        if c0 + c1 <= half * m.reach {
+            items.push(Item {
+                c0,
+                c1,
+                reach: m.reach,
+                hint: m.hint,
+                ..it
+            });
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug)]
 struct Interval {
     t0: f64,
@@ -90,7 +124,7 @@ pub(crate) struct Work {
     /// Lever arms `ρ_qj` per body and axis at the configuration numbered `lever_pose[q]`.
     lever: Vec<f64>,
     lever_pose: Vec<u32>,
-    mid: Vec<f64>,
+    mid: Vec<Mid>,
     stack: Vec<Interval>,
 }
 
@@ -363,36 +397,13 @@ impl EdgeChecker for Certified {
                 if cm <= 0.0 {
                     return false;
                 }
-                work.mid.push(cm);
-                work.mid.push(reach);
-                work.mid.push(f64::from(hint));
+                work.mid.push(Mid { c: cm, reach, hint });
             }
+            let parent = iv.start..iv.start + iv.len;
             let left_start = work.items.len();
-            for (i, m) in (iv.start..iv.start + iv.len).zip(work.mid.chunks_exact(3)) {
-                let (cm, reach, hint) = (m[0], m[1], m[2] as u32);
-                let it = work.items[i];
-                if it.c0 + cm <= half * reach {
-                    work.items.push(Item {
-                        c1: cm,
-                        reach,
-                        hint,
-                        ..it
-                    });
-                }
-            }
+            push_children(&mut work.items, parent.clone(), &work.mid, half, true);
             let right_start = work.items.len();
-            for (i, m) in (iv.start..iv.start + iv.len).zip(work.mid.chunks_exact(3)) {
-                let (cm, reach, hint) = (m[0], m[1], m[2] as u32);
-                let it = work.items[i];
-                if cm + it.c1 <= half * reach {
-                    work.items.push(Item {
-                        c0: cm,
-                        reach,
-                        hint,
-                        ..it
-                    });
-                }
-            }
+            push_children(&mut work.items, parent, &work.mid, half, false);
             let end = work.items.len();
             if end > right_start {
                 work.stack.push(Interval {
