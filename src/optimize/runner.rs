@@ -112,6 +112,14 @@ pub fn check_planner(p: &crate::planning::PlannerConfig) -> Result<()> {
             "must be at least 1",
         ));
     }
+    use crate::limits::MAX_POSTURES;
+    if p.postures > MAX_POSTURES {
+        return Err(Error::invalid(
+            "planner.postures",
+            p.postures,
+            format!("must be at most {MAX_POSTURES}"),
+        ));
+    }
     Ok(())
 }
 

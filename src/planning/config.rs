@@ -2,7 +2,7 @@
 
 use super::schedule::Schedule;
 use crate::collision::{BodyModel, CheckerKind, SelfCollisionConfig};
-use crate::limits::{within, MAX_IK_STEPS, MAX_ITERATIONS, MAX_LENGTH, MAX_SETTING};
+use crate::limits::{within, MAX_IK_STEPS, MAX_ITERATIONS, MAX_LENGTH, MAX_POSTURES, MAX_SETTING};
 use serde::{Deserialize, Serialize};
 
 /// The `[planner]` section: the RRT that decides reachability (paper §II-D, Eq. 10).
@@ -30,6 +30,10 @@ pub struct PlannerConfig {
     pub time_limit: Option<f64>,
     /// Damped-least-squares steps per goal-biased extension. Default 20.
     pub ik_steps: usize,
+    /// Backward trees per unreached task: each grows from a collision-free inverse-kinematics
+    /// posture that reaches the task until it joins the tree from home. 0 plans with the tree
+    /// from home alone. Default 1.
+    pub postures: usize,
     /// How `l_max` and `max_iterations` change as an optimisation progresses (paper §V).
     /// Default: constant.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -42,7 +46,8 @@ pub struct PlannerConfig {
 impl PlannerConfig {
     /// Checks every setting; errors name the field below `planner` and its value. Bounds:
     /// [`crate::limits`] (`max_iterations` and the schedule's budgets at most
-    /// [`MAX_ITERATIONS`], `ik_steps` at most [`MAX_IK_STEPS`], `goal_tolerance` at most
+    /// [`MAX_ITERATIONS`], `ik_steps` at most [`MAX_IK_STEPS`], `postures` at most
+    /// [`MAX_POSTURES`], `goal_tolerance` at most
     /// [`MAX_LENGTH`], `l_max` and `lambda` at most [`MAX_SETTING`]).
     pub fn validate(&self) -> crate::Result<()> {
         let bad = |field: &str, value: &dyn std::fmt::Display, why: String| {
@@ -99,6 +104,13 @@ impl PlannerConfig {
                 format!("must be at most {MAX_IK_STEPS}"),
             );
         }
+        if self.postures > MAX_POSTURES {
+            return bad(
+                "postures",
+                &self.postures,
+                format!("must be at most {MAX_POSTURES}"),
+            );
+        }
         if let Some(s) = &self.schedule {
             s.validate()?;
         }
@@ -118,6 +130,7 @@ impl Default for PlannerConfig {
             goal_bias: 0.2,
             time_limit: None,
             ik_steps: 20,
+            postures: 1,
             schedule: None,
             self_collision: SelfCollisionConfig::default(),
         }
