@@ -2,7 +2,9 @@
 
 use super::schedule::Schedule;
 use crate::collision::{BodyModel, CheckerKind, SelfCollisionConfig};
-use crate::limits::{within, MAX_IK_STEPS, MAX_ITERATIONS, MAX_LENGTH, MAX_POSTURES, MAX_SETTING};
+use crate::limits::{
+    within, MAX_BUDGET_GROWTH, MAX_IK_STEPS, MAX_ITERATIONS, MAX_LENGTH, MAX_POSTURES, MAX_SETTING,
+};
 use serde::{Deserialize, Serialize};
 
 /// The `[planner]` section: the RRT that decides reachability (paper §II-D, Eq. 10).
@@ -20,7 +22,8 @@ pub struct PlannerConfig {
     pub lambda: f64,
     /// Distance (metres) at which the end effector counts as on a task point. Default 0.02.
     pub goal_tolerance: f64,
-    /// RRT iterations per design. Default 2000.
+    /// RRT iterations per design: the budget of a run, unless it grows (see `budget_growth`).
+    /// Default 2000.
     pub max_iterations: usize,
     /// Probability of growing toward a task point instead of a random sample. Default 0.2.
     pub goal_bias: f64,
@@ -34,6 +37,11 @@ pub struct PlannerConfig {
     /// posture that reaches the task until it joins the tree from home. 0 plans with the tree
     /// from home alone. Default 1.
     pub postures: usize,
+    /// How far the iteration budget grows: while an unreached task has a backward tree (a
+    /// collision-free posture on it is known), a run may use up to `budget_growth ×
+    /// max_iterations` iterations (at most [`MAX_ITERATIONS`]); otherwise it stops at
+    /// `max_iterations`. 1 keeps the budget fixed. Default 5.
+    pub budget_growth: usize,
     /// How `l_max` and `max_iterations` change as an optimisation progresses (paper §V).
     /// Default: constant.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -47,7 +55,7 @@ impl PlannerConfig {
     /// Checks every setting; errors name the field below `planner` and its value. Bounds:
     /// [`crate::limits`] (`max_iterations` and the schedule's budgets at most
     /// [`MAX_ITERATIONS`], `ik_steps` at most [`MAX_IK_STEPS`], `postures` at most
-    /// [`MAX_POSTURES`], `goal_tolerance` at most
+    /// [`MAX_POSTURES`], `budget_growth` in 1..=[`MAX_BUDGET_GROWTH`], `goal_tolerance` at most
     /// [`MAX_LENGTH`], `l_max` and `lambda` at most [`MAX_SETTING`]).
     pub fn validate(&self) -> crate::Result<()> {
         let bad = |field: &str, value: &dyn std::fmt::Display, why: String| {
@@ -111,6 +119,13 @@ impl PlannerConfig {
                 format!("must be at most {MAX_POSTURES}"),
             );
         }
+        if !(1..=MAX_BUDGET_GROWTH).contains(&self.budget_growth) {
+            return bad(
+                "budget_growth",
+                &self.budget_growth,
+                format!("must lie in 1..={MAX_BUDGET_GROWTH}"),
+            );
+        }
         if let Some(s) = &self.schedule {
             s.validate()?;
         }
@@ -131,6 +146,7 @@ impl Default for PlannerConfig {
             time_limit: None,
             ik_steps: 20,
             postures: 1,
+            budget_growth: 5,
             schedule: None,
             self_collision: SelfCollisionConfig::default(),
         }

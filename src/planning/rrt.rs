@@ -6,6 +6,7 @@ use super::ik::{dls, IkWork};
 use super::PlannerConfig;
 use crate::collision::{EdgeChecker, Scratch};
 use crate::kinematics::{Chain, Frames};
+use crate::limits::MAX_ITERATIONS;
 use nalgebra::Point3;
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
@@ -545,7 +546,9 @@ impl<'a> Rrt<'a> {
     }
 
     /// Grows the forward tree from home until every task is reached, for up to
-    /// `config.max_iterations` iterations, and within the time cap if set.
+    /// `config.max_iterations` iterations, or up to `budget_growth` times as many (at most
+    /// [`MAX_ITERATIONS`]) while an unreached task has a backward tree (a collision-free posture
+    /// on the task is known, so more work is likely to pay), and within the time cap if set.
     /// Each iteration is, with probability `goal_bias`, a goal-biased one (see
     /// [`Rrt::toward_task`]: greedy extensions toward IK goals, and the roots of the backward
     /// trees), otherwise an exploration one ([`Rrt::explore`]: a uniform sample, and joins
@@ -583,9 +586,18 @@ impl<'a> Rrt<'a> {
         chain.fk(&home, &mut s.work.frames);
         s.tree.push(&home, &s.work.frames, 0);
         self.mark_reached(&s.tree, 0, &mut s.reached);
+        let base = self.config.max_iterations;
+        let grown = base
+            .saturating_mul(self.config.budget_growth)
+            .min(MAX_ITERATIONS)
+            .max(base);
         let start = Instant::now();
         let mut iterations = 0;
-        while iterations < self.config.max_iterations && s.reached.iter().any(Option::is_none) {
+        while s.reached.iter().any(Option::is_none) {
+            let budget = if s.goals.is_empty() { base } else { grown };
+            if iterations >= budget {
+                break;
+            }
             if let Some(limit) = self.config.time_limit {
                 if start.elapsed().as_secs_f64() > limit {
                     break;
