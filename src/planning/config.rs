@@ -152,3 +152,38 @@ impl Default for PlannerConfig {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn postures_and_budget_growth_are_bounded() {
+        assert!(PlannerConfig::default().validate().is_ok());
+        let with = |postures: usize, budget_growth: usize| PlannerConfig {
+            postures,
+            budget_growth,
+            ..PlannerConfig::default()
+        };
+        assert!(with(0, 1).validate().is_ok());
+        assert!(with(MAX_POSTURES, MAX_BUDGET_GROWTH).validate().is_ok());
+        for (config, field) in [
+            (with(MAX_POSTURES + 1, 5), "planner.postures"),
+            (with(1, 0), "planner.budget_growth"),
+            (with(1, MAX_BUDGET_GROWTH + 1), "planner.budget_growth"),
+        ] {
+            let e = config.validate().unwrap_err().to_string();
+            assert!(e.contains(field), "{e}");
+        }
+    }
+
+    #[test]
+    fn a_planner_table_without_the_new_keys_takes_their_defaults() {
+        let p: PlannerConfig = toml::from_str("max_iterations = 500").unwrap();
+        assert_eq!(p.max_iterations, 500);
+        assert_eq!(p.postures, 1);
+        assert_eq!(p.budget_growth, 5);
+        let p: PlannerConfig = toml::from_str("postures = 3\nbudget_growth = 2").unwrap();
+        assert_eq!((p.postures, p.budget_growth), (3, 2));
+    }
+}
