@@ -12,13 +12,15 @@
 //!
 //! ```sh
 //! cargo run --release --example reach_presets -- [--checker certified|segment|discrete|ccd]
-//!     [--design largest|middle|smallest|random] [--iterations N] [--presets A-B]
-//!     [--seeds A-B] [--preset paper-2d|paper-3d] [--repeat N] [--verbose]
+//!     [--design largest|middle|smallest|random] [--iterations N] [--postures N]
+//!     [--budget-growth N] [--presets A-B] [--seeds A-B] [--preset paper-2d|paper-3d]
+//!     [--repeat N] [--verbose]
 //! ```
 //!
 //! `--design middle` decodes the middle of every variable's bounds, `smallest` their lower
 //! bounds, `random` a design drawn uniformly from the bounds for each preset and planner seed
-//! (as in an optimiser's first generation). `--iterations` overrides `planner.max_iterations`.
+//! (as in an optimiser's first generation). `--iterations`, `--postures` and `--budget-growth`
+//! override `planner.max_iterations`, `planner.postures` and `planner.budget_growth`.
 //! `--repeat N` runs everything N times and reports the smallest time of each preset (the
 //! results are the same every time), which is steadier on a busy machine. `--verbose` adds a
 //! line per unreached task with the tree's closest approach.
@@ -76,6 +78,14 @@ fn design(s: &Scenario, which: &str, preset: u64, seed: u64) -> Design {
     }
 }
 
+/// Planner settings that replace the scenario's.
+struct Settings {
+    checker: CheckerKind,
+    iterations: Option<usize>,
+    postures: Option<usize>,
+    budget_growth: Option<usize>,
+}
+
 /// What the planner seeds gave on one preset.
 struct PresetRuns {
     tasks: usize,
@@ -92,18 +102,24 @@ fn run_preset(
     preset: Preset,
     p: u64,
     which: &str,
-    checker: CheckerKind,
-    iterations: Option<usize>,
+    settings: &Settings,
     seeds: &RangeInclusive<u64>,
     verbose: bool,
 ) -> PresetRuns {
     let s = Scenario::from_spec(&generate(preset, p)).expect("a valid preset");
     let scene = Arc::new(CollisionScene::new(&s.workspace));
     let mut config = s.planner.clone();
-    config.checker = checker;
-    if let Some(n) = iterations {
+    config.checker = settings.checker;
+    if let Some(n) = settings.iterations {
         config.max_iterations = n;
     }
+    if let Some(n) = settings.postures {
+        config.postures = n;
+    }
+    if let Some(n) = settings.budget_growth {
+        config.budget_growth = n;
+    }
+    config.validate().expect("valid planner settings");
     let chains: Vec<_> = seeds
         .clone()
         .map(|seed| design(&s, which, p, seed).chain())
@@ -142,9 +158,13 @@ fn run_preset(
 }
 
 fn main() {
-    let mut checker = CheckerKind::Certified;
+    let mut settings = Settings {
+        checker: CheckerKind::Certified,
+        iterations: None,
+        postures: None,
+        budget_growth: None,
+    };
     let mut which = "largest".to_string();
-    let mut iterations: Option<usize> = None;
     let mut presets = 1..=10u64;
     let mut seeds = 1..=5u64;
     let mut preset = Preset::Paper2d;
@@ -160,9 +180,11 @@ fn main() {
             .next()
             .unwrap_or_else(|| panic!("{flag} needs a value"));
         match flag.as_str() {
-            "--checker" => checker = value.parse().expect("a checker name"),
+            "--checker" => settings.checker = value.parse().expect("a checker name"),
             "--design" => which = value,
-            "--iterations" => iterations = Some(value.parse().expect("an iteration count")),
+            "--iterations" => settings.iterations = Some(value.parse().expect("a count")),
+            "--postures" => settings.postures = Some(value.parse().expect("a count")),
+            "--budget-growth" => settings.budget_growth = Some(value.parse().expect("a factor")),
             "--presets" => presets = range(&value),
             "--seeds" => seeds = range(&value),
             "--preset" => preset = value.parse().expect("paper-2d or paper-3d"),
@@ -171,19 +193,20 @@ fn main() {
         }
     }
     println!(
-        "{} presets {}-{}, planner seeds {}-{}, {which} design, checker {checker}",
+        "{} presets {}-{}, planner seeds {}-{}, {which} design, checker {}",
         preset.name(),
         presets.start(),
         presets.end(),
         seeds.start(),
         seeds.end(),
+        settings.checker
     );
     let (mut reached, mut runs, mut checks) = (0usize, 0usize, 0u64);
     let (mut wall, mut cpu) = (0.0, 0.0);
     for p in presets {
-        let mut r = run_preset(preset, p, &which, checker, iterations, &seeds, verbose);
+        let mut r = run_preset(preset, p, &which, &settings, &seeds, verbose);
         for _ in 1..repeat {
-            let again = run_preset(preset, p, &which, checker, iterations, &seeds, false);
+            let again = run_preset(preset, p, &which, &settings, &seeds, false);
             assert_eq!(
                 again.reached, r.reached,
                 "the same seeds give the same results"
