@@ -549,11 +549,13 @@ impl<'a> Rrt<'a> {
     /// `config.max_iterations` iterations, or up to `budget_growth` times as many (at most
     /// [`MAX_ITERATIONS`]) while an unreached task has a backward tree (a collision-free posture
     /// on the task is known, so more work is likely to pay), and within the time cap if set.
-    /// Each iteration is, with probability `goal_bias`, a goal-biased one (see
-    /// [`Rrt::toward_task`]: greedy extensions toward IK goals, and the roots of the backward
-    /// trees), otherwise an exploration one ([`Rrt::explore`]: a uniform sample, and joins
-    /// between the forward and backward trees). Every new node passes `node_free` and every
-    /// new edge `edge_free`. Deterministic for a given `rng` state.
+    /// Each iteration is, with probability `goal_bias`, a goal-biased one: greedy extensions
+    /// toward IK goals of an unreached task, whose collision-free postures on the task root the
+    /// backward trees (up to `postures` per task). Otherwise it is an exploration one: a uniform
+    /// sample that the forward tree, or every other time a backward tree, grows toward, and a
+    /// greedy attempt of the other side to join the new node; a join grafts the backward tree
+    /// onto the forward one. Every new node passes `node_free` and every new edge `edge_free`.
+    /// Deterministic for a given `rng` state.
     pub fn grow(&self, rng: &mut ChaCha8Rng, scratch: &mut Scratch) -> Growth {
         let chain = self.chain;
         let mut s = Search {
