@@ -39,6 +39,10 @@ pub const MAX_ANGLE: f64 = 1e3;
 pub const MAX_ITERATIONS: usize = 1_000_000;
 /// Most damped-least-squares steps per extension (`planner.ik_steps`).
 pub const MAX_IK_STEPS: usize = 10_000;
+/// Most backward trees per task (`planner.postures`).
+pub const MAX_POSTURES: usize = 100;
+/// Largest growth factor of the iteration budget (`planner.budget_growth`).
+pub const MAX_BUDGET_GROWTH: usize = 100;
 /// Largest population, swarm or ASA batch (`optimizer.population`, `optimizer.asa.batch`).
 pub const MAX_POPULATION: usize = 10_000;
 /// Largest magnitude of any other real setting (objective weights, optimiser parameters,

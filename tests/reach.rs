@@ -5,6 +5,7 @@ use kinsynth::collision::{CheckerKind, CollisionScene};
 use kinsynth::design::{AxisRanges, Design, LinkDesign};
 use kinsynth::kinematics::{Axis, Placement, Range};
 use kinsynth::planning::{reachability, PlannerConfig, ReachReport};
+use kinsynth::scenario::preset::{generate, Preset};
 use kinsynth::world::{Obstacle, ObstacleShape, Workspace};
 use kinsynth::Scenario;
 use nalgebra::{IsometryMatrix3, Point3};
@@ -227,6 +228,141 @@ fn the_largest_bundled_designs_reach_every_task_for_every_seed() {
             );
         }
     }
+}
+
+/// Reachability of the largest design of the generated paper-2d preset `preset` with its own
+/// planner settings (checker `certified`, L_max = π/4, 2,000 iterations), changed by `edit`.
+fn preset_run(
+    preset: u64,
+    seed: u64,
+    edit: impl Fn(&mut PlannerConfig),
+) -> (ReachReport, Scenario) {
+    let s = Scenario::from_spec(&generate(Preset::Paper2d, preset)).unwrap();
+    let scene = Arc::new(CollisionScene::new(&s.workspace));
+    let mut config = s.planner.clone();
+    edit(&mut config);
+    let chain = s.space.largest().chain();
+    let r = reachability(&chain, &scene, &s.workspace.tasks, &config, seed, 0);
+    (r, s)
+}
+
+/// Paper-2d presets 3 and 6 have tasks that a planner growing one tree from home rarely
+/// reaches within the default budget (one posture at full stretch, one in a pocket between
+/// obstacles); with backward trees from collision-free IK postures the largest design reaches
+/// all ten tasks for each of these planner seeds, along valid paths.
+#[test]
+fn paper_2d_presets_3_and_6_reach_every_task_within_the_default_budget() {
+    for preset in [3, 6] {
+        for seed in 1..=4 {
+            let (r, s) = preset_run(preset, seed, |_| {});
+            assert_eq!(
+                r.reached(),
+                10,
+                "preset {preset} seed {seed}: {} iterations",
+                r.iterations
+            );
+            assert!(r.iterations <= s.planner.max_iterations);
+            check_paths(&s.space.largest(), &r, &s.planner);
+        }
+    }
+}
+
+/// Paths that run through a grafted backward tree are free by the dense-sampling oracle too:
+/// the backward tree's edges are used in the opposite direction to the one they were grown in.
+#[test]
+fn paths_through_grafted_backward_trees_are_collision_free() {
+    let (r, s) = preset_run(6, 1, |_| {});
+    assert_eq!(r.reached(), 10);
+    assert!(
+        r.joins > 0,
+        "some tasks are reached through a backward tree"
+    );
+    let scene = CollisionScene::new(&s.workspace);
+    let chain = s.space.largest().chain();
+    let body = kinsynth::collision::RobotBody::new(&chain, Vec::new(), &s.planner.self_collision);
+    let mut seen = std::collections::HashSet::new();
+    for t in r.targets.iter().filter(|t| t.reached) {
+        for w in t.path.as_ref().unwrap().points.windows(2) {
+            let key: Vec<u64> = w.iter().flatten().map(|v| v.to_bits()).collect();
+            if seen.insert(key) {
+                let v = judge_edge(&scene, &chain, &body, &w[0], &w[1], ORACLE_SUBSTEPS);
+                assert!(
+                    v.free,
+                    "task {}: edge collides at t = {:?}",
+                    t.index, v.first_hit
+                );
+            }
+        }
+    }
+}
+
+/// Preset 9 needs more than the default 2,000 iterations for some planner seeds: the budget
+/// grows while an unreached task has a collision-free posture, and those seeds then reach
+/// every task, where a fixed budget falls short.
+#[test]
+fn the_budget_grows_while_a_posture_of_an_unreached_task_is_known() {
+    for seed in [3, 5] {
+        let (grown, s) = preset_run(9, seed, |_| {});
+        assert_eq!(grown.reached(), 10, "seed {seed}");
+        assert!(grown.iterations > s.planner.max_iterations);
+        assert!(grown.iterations <= s.planner.budget_growth * s.planner.max_iterations);
+        let fixed = preset_run(9, seed, |c| c.budget_growth = 1).0;
+        assert!(fixed.reached() < 10, "seed {seed}");
+        assert_eq!(fixed.iterations, s.planner.max_iterations);
+    }
+}
+
+/// A single link between two posts: the task behind the base has a collision-free posture (the
+/// link turned by π), but the posts block the way there in both directions. The budget grows
+/// to its cap and no further; without growth or without backward trees it stays put.
+#[test]
+fn an_unjoinable_posture_grows_the_budget_to_its_cap_and_no_further() {
+    let design = planar_arm(&[1.0]);
+    let posts = vec![
+        Obstacle::sphere("left", Point3::new(0.0, 0.7, 0.0), 0.2).unwrap(),
+        Obstacle::sphere("right", Point3::new(0.0, -0.7, 0.0), 0.2).unwrap(),
+    ];
+    let w = Workspace::new(posts, vec![Point3::new(-1.0, 0.0, 0.0)], 0.0).unwrap();
+    let scene = Arc::new(CollisionScene::new(&w));
+    let chain = design.chain();
+    for (postures, growth, expected) in [(1, 5, 500), (1, 1, 100), (0, 5, 100), (2, 3, 300)] {
+        let config = PlannerConfig {
+            max_iterations: 100,
+            postures,
+            budget_growth: growth,
+            ..PlannerConfig::default()
+        };
+        let r = reachability(&chain, &scene, &w.tasks, &config, 3, 0);
+        assert_eq!(r.reached(), 0);
+        assert_eq!(
+            r.iterations, expected,
+            "postures {postures}, budget_growth {growth}"
+        );
+    }
+}
+
+/// One seed fixes the report, also when reports are computed in parallel on a thread pool, and
+/// with backward trees grafted during the run.
+#[test]
+fn reports_with_backward_trees_are_the_same_in_parallel_and_in_sequence() {
+    use rayon::prelude::*;
+    let seeds: Vec<u64> = (1..=4).collect();
+    let sequential: Vec<ReachReport> = seeds.iter().map(|&k| preset_run(6, k, |_| {}).0).collect();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    let parallel: Vec<ReachReport> = pool.install(|| {
+        seeds
+            .par_iter()
+            .map(|&k| preset_run(6, k, |_| {}).0)
+            .collect::<Vec<_>>()
+    });
+    for (a, b) in sequential.iter().zip(&parallel) {
+        assert_eq!(a, b, "seed {}", a.seed);
+    }
+    assert_ne!(sequential[0], sequential[1], "seeds give different runs");
+    assert!(sequential.iter().any(|r| r.joins > 0));
 }
 
 fn reach_json(threads: &str, dir: &Path) -> String {

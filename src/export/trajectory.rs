@@ -257,6 +257,7 @@ mod tests {
             seed: 0,
             iterations: 0,
             nodes: 0,
+            joins: 0,
             node_checks: 0,
             edge_checks: 0,
             home_blocked: None,

@@ -112,6 +112,21 @@ pub fn check_planner(p: &crate::planning::PlannerConfig) -> Result<()> {
             "must be at least 1",
         ));
     }
+    use crate::limits::{MAX_BUDGET_GROWTH, MAX_POSTURES};
+    if p.postures > MAX_POSTURES {
+        return Err(Error::invalid(
+            "planner.postures",
+            p.postures,
+            format!("must be at most {MAX_POSTURES}"),
+        ));
+    }
+    if !(1..=MAX_BUDGET_GROWTH).contains(&p.budget_growth) {
+        return Err(Error::invalid(
+            "planner.budget_growth",
+            p.budget_growth,
+            format!("must lie in 1..={MAX_BUDGET_GROWTH}"),
+        ));
+    }
     Ok(())
 }
 

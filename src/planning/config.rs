@@ -2,7 +2,9 @@
 
 use super::schedule::Schedule;
 use crate::collision::{BodyModel, CheckerKind, SelfCollisionConfig};
-use crate::limits::{within, MAX_IK_STEPS, MAX_ITERATIONS, MAX_LENGTH, MAX_SETTING};
+use crate::limits::{
+    within, MAX_BUDGET_GROWTH, MAX_IK_STEPS, MAX_ITERATIONS, MAX_LENGTH, MAX_POSTURES, MAX_SETTING,
+};
 use serde::{Deserialize, Serialize};
 
 /// The `[planner]` section: the RRT that decides reachability (paper §II-D, Eq. 10).
@@ -20,7 +22,8 @@ pub struct PlannerConfig {
     pub lambda: f64,
     /// Distance (metres) at which the end effector counts as on a task point. Default 0.02.
     pub goal_tolerance: f64,
-    /// RRT iterations per design. Default 2000.
+    /// RRT iterations per design: the budget of a run, unless it grows (see `budget_growth`).
+    /// Default 2000.
     pub max_iterations: usize,
     /// Probability of growing toward a task point instead of a random sample. Default 0.2.
     pub goal_bias: f64,
@@ -30,6 +33,15 @@ pub struct PlannerConfig {
     pub time_limit: Option<f64>,
     /// Damped-least-squares steps per goal-biased extension. Default 20.
     pub ik_steps: usize,
+    /// Backward trees per unreached task: each grows from a collision-free inverse-kinematics
+    /// posture that reaches the task until it joins the tree from home. 0 plans with the tree
+    /// from home alone. Default 1.
+    pub postures: usize,
+    /// How far the iteration budget grows: while an unreached task has a backward tree (a
+    /// collision-free posture on it is known), a run may use up to `budget_growth ×
+    /// max_iterations` iterations (at most [`MAX_ITERATIONS`]); otherwise it stops at
+    /// `max_iterations`. 1 keeps the budget fixed. Default 5.
+    pub budget_growth: usize,
     /// How `l_max` and `max_iterations` change as an optimisation progresses (paper §V).
     /// Default: constant.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -42,7 +54,8 @@ pub struct PlannerConfig {
 impl PlannerConfig {
     /// Checks every setting; errors name the field below `planner` and its value. Bounds:
     /// [`crate::limits`] (`max_iterations` and the schedule's budgets at most
-    /// [`MAX_ITERATIONS`], `ik_steps` at most [`MAX_IK_STEPS`], `goal_tolerance` at most
+    /// [`MAX_ITERATIONS`], `ik_steps` at most [`MAX_IK_STEPS`], `postures` at most
+    /// [`MAX_POSTURES`], `budget_growth` in 1..=[`MAX_BUDGET_GROWTH`], `goal_tolerance` at most
     /// [`MAX_LENGTH`], `l_max` and `lambda` at most [`MAX_SETTING`]).
     pub fn validate(&self) -> crate::Result<()> {
         let bad = |field: &str, value: &dyn std::fmt::Display, why: String| {
@@ -99,6 +112,20 @@ impl PlannerConfig {
                 format!("must be at most {MAX_IK_STEPS}"),
             );
         }
+        if self.postures > MAX_POSTURES {
+            return bad(
+                "postures",
+                &self.postures,
+                format!("must be at most {MAX_POSTURES}"),
+            );
+        }
+        if !(1..=MAX_BUDGET_GROWTH).contains(&self.budget_growth) {
+            return bad(
+                "budget_growth",
+                &self.budget_growth,
+                format!("must lie in 1..={MAX_BUDGET_GROWTH}"),
+            );
+        }
         if let Some(s) = &self.schedule {
             s.validate()?;
         }
@@ -118,8 +145,45 @@ impl Default for PlannerConfig {
             goal_bias: 0.2,
             time_limit: None,
             ik_steps: 20,
+            postures: 1,
+            budget_growth: 5,
             schedule: None,
             self_collision: SelfCollisionConfig::default(),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn postures_and_budget_growth_are_bounded() {
+        assert!(PlannerConfig::default().validate().is_ok());
+        let with = |postures: usize, budget_growth: usize| PlannerConfig {
+            postures,
+            budget_growth,
+            ..PlannerConfig::default()
+        };
+        assert!(with(0, 1).validate().is_ok());
+        assert!(with(MAX_POSTURES, MAX_BUDGET_GROWTH).validate().is_ok());
+        for (config, field) in [
+            (with(MAX_POSTURES + 1, 5), "planner.postures"),
+            (with(1, 0), "planner.budget_growth"),
+            (with(1, MAX_BUDGET_GROWTH + 1), "planner.budget_growth"),
+        ] {
+            let e = config.validate().unwrap_err().to_string();
+            assert!(e.contains(field), "{e}");
+        }
+    }
+
+    #[test]
+    fn a_planner_table_without_the_new_keys_takes_their_defaults() {
+        let p: PlannerConfig = toml::from_str("max_iterations = 500").unwrap();
+        assert_eq!(p.max_iterations, 500);
+        assert_eq!(p.postures, 1);
+        assert_eq!(p.budget_growth, 5);
+        let p: PlannerConfig = toml::from_str("postures = 3\nbudget_growth = 2").unwrap();
+        assert_eq!((p.postures, p.budget_growth), (3, 2));
     }
 }

@@ -52,6 +52,10 @@ pub struct ReachReport {
     pub iterations: usize,
     /// Tree nodes.
     pub nodes: usize,
+    /// Backward trees (grown from collision-free IK postures of tasks) joined to the tree from
+    /// home; each reached its task through the join.
+    #[serde(default)]
+    pub joins: usize,
     /// Node checks made.
     pub node_checks: u64,
     /// Edge checks made.
@@ -197,6 +201,7 @@ pub fn reachability_of(
         seed,
         iterations: growth.iterations,
         nodes: tree.len(),
+        joins: growth.joins,
         node_checks: scratch.stats.nodes,
         edge_checks: scratch.stats.edges,
         home_blocked: growth

@@ -1,20 +1,24 @@
 //! A goal-biased RRT in actuation space, grown from home, that serves every task point with one
-//! tree (paper §II-D, Eq. 10; the planner of §III).
+//! tree (paper §II-D, Eq. 10; the planner of §III), helped by backward trees grown from
+//! collision-free inverse-kinematics postures of the tasks it has not reached yet.
 
 use super::ik::{dls, IkWork};
 use super::PlannerConfig;
 use crate::collision::{EdgeChecker, Scratch};
 use crate::kinematics::{Chain, Frames};
+use crate::limits::MAX_ITERATIONS;
 use nalgebra::Point3;
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 use std::collections::HashSet;
 use std::time::Instant;
 
-/// Greedy steps toward an inverse-kinematics goal in one goal-biased iteration.
+/// Greedy steps toward an inverse-kinematics goal in one goal-biased iteration, and toward the
+/// other tree when a forward and a backward tree try to join.
 pub const CONNECT_STEPS: usize = 25;
 
-/// The tree: configurations, their joint positions `f(a)` and end effectors, and parents.
+/// The tree: configurations, their joint positions `f(a)` and end effectors, and parents (the
+/// root is its own parent; a grafted branch can have parents of higher index than itself).
 #[derive(Clone, Debug)]
 pub struct Tree {
     dof: usize,
@@ -43,6 +47,36 @@ impl Tree {
         self.ee.push(frames.end_effector());
         self.parent.push(parent);
         (self.parent.len() - 1) as u32
+    }
+
+    /// Empties the tree, keeping its buffers.
+    fn clear(&mut self) {
+        self.configs.clear();
+        self.positions.clear();
+        self.ee.clear();
+        self.parent.clear();
+    }
+
+    /// Appends every node of `other` and links `other`'s node `at` to this tree's node `onto`:
+    /// the parent links on the path from `at` to `other`'s root are reversed, so every grafted
+    /// node leads back to this tree's root. Returns the index offset of the grafted nodes.
+    fn graft(&mut self, other: &Tree, at: u32, onto: u32) -> u32 {
+        let offset = self.len() as u32;
+        self.configs.extend_from_slice(&other.configs);
+        self.positions.extend_from_slice(&other.positions);
+        self.ee.extend_from_slice(&other.ee);
+        self.parent.extend(other.parent.iter().map(|&p| p + offset));
+        let (mut child, mut new_parent) = (at, onto);
+        loop {
+            let old = other.parent[child as usize];
+            self.parent[(offset + child) as usize] = new_parent;
+            if child == 0 {
+                break;
+            }
+            new_parent = offset + child;
+            child = old;
+        }
+        offset
     }
 
     /// Number of nodes.
@@ -145,6 +179,8 @@ pub struct Growth {
     pub reached: Vec<Option<u32>>,
     /// Iterations used.
     pub iterations: usize,
+    /// Backward trees joined to the tree from home (each reached its task through the join).
+    pub joins: usize,
     /// True when the home configuration is not collision-free.
     pub home_blocked: bool,
 }
@@ -157,6 +193,7 @@ impl Growth {
             tree: Tree::new(chain),
             reached: vec![None; tasks],
             iterations: 0,
+            joins: 0,
             home_blocked: true,
         }
     }
@@ -167,6 +204,7 @@ struct Work {
     frames: Frames,
     q_new: Vec<f64>,
     q_goal: Vec<f64>,
+    q_join: Vec<f64>,
     ik: IkWork,
 }
 
@@ -175,6 +213,52 @@ fn metric(fa: &[Point3<f64>], fb: &[Point3<f64>], a: &[f64], b: &[f64], lambda: 
     let df: f64 = fa.iter().zip(fb).map(|(p, q)| (q - p).norm_squared()).sum();
     let da: f64 = a.iter().zip(b).map(|(x, y)| (y - x) * (y - x)).sum();
     df.sqrt() + lambda * da.sqrt()
+}
+
+/// Euclidean distance in actuation space.
+fn distance(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y) * (x - y))
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// What one extension step did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Step {
+    /// No progress: the target is the node itself, or the step collides.
+    Blocked,
+    /// A new node was added.
+    Added(u32),
+    /// The target, a node of another tree, is one free step away; nothing was added.
+    Arrived,
+}
+
+/// A tree grown backward from a collision-free inverse-kinematics posture of one task: its
+/// root reaches the task, and joining it to the forward tree gives a path from home.
+struct GoalTree {
+    task: usize,
+    tree: Tree,
+}
+
+/// The state of one run of [`Rrt::grow`].
+struct Search {
+    /// The forward tree, rooted at home.
+    tree: Tree,
+    reached: Vec<Option<u32>>,
+    /// Backward trees of unreached tasks.
+    goals: Vec<GoalTree>,
+    /// Emptied backward trees, kept for their buffers.
+    spare: Vec<Tree>,
+    /// (node, task) pairs whose IK goal was already tried.
+    tried: HashSet<(u32, usize)>,
+    unreached: Vec<usize>,
+    /// Alternates forward and backward exploration while backward trees exist.
+    backward_turn: bool,
+    /// Backward trees grafted so far.
+    joins: usize,
+    work: Work,
 }
 
 /// The RRT planner for one chain and one checker.
@@ -204,17 +288,13 @@ impl<'a> Rrt<'a> {
 
     /// Steers from node `near` toward `target`, cutting the step until the metric of paper
     /// Eq. 10 is within `L_max`; the candidate is left in `work.q_new` with its frames in
-    /// `work.frames`. Returns false when no progress is possible.
-    fn steer(&self, tree: &Tree, near: u32, target: &[f64], work: &mut Work) -> bool {
+    /// `work.frames`. Returns `None` when no progress is possible, else whether the step goes
+    /// the whole way to `target`.
+    fn steer(&self, tree: &Tree, near: u32, target: &[f64], work: &mut Work) -> Option<bool> {
         let from = tree.config(near);
-        let dist: f64 = from
-            .iter()
-            .zip(target)
-            .map(|(a, b)| (a - b) * (a - b))
-            .sum::<f64>()
-            .sqrt();
+        let dist = distance(from, target);
         if dist < 1e-9 {
-            return false;
+            return None;
         }
         let mut s: f64 = 1.0;
         for _ in 0..30 {
@@ -230,42 +310,59 @@ impl<'a> Rrt<'a> {
                 self.config.lambda,
             );
             if m <= self.config.l_max {
-                return s * dist > 1e-9;
+                return (s * dist > 1e-9).then_some(s == 1.0);
             }
             // The metric grows about linearly with the step: aim just inside the bound.
             s *= (0.95 * self.config.l_max / m).min(0.7);
         }
-        false
+        None
     }
 
-    /// Tries to add the steered candidate as a child of `near`.
+    /// Tries to add the steered candidate as a child of `near`. With `join`, `target` is a node
+    /// of another tree: when it is one step away, only the edge to it is checked and nothing is
+    /// added ([`Step::Arrived`]).
     fn extend(
         &self,
         tree: &mut Tree,
         near: u32,
         target: &[f64],
+        join: bool,
         work: &mut Work,
         scratch: &mut Scratch,
-    ) -> Option<u32> {
-        if !self.steer(tree, near, target, work) {
-            return None;
+    ) -> Step {
+        if join && distance(tree.config(near), target) < 1e-9 {
+            return Step::Arrived;
+        }
+        let Some(whole) = self.steer(tree, near, target, work) else {
+            return Step::Blocked;
+        };
+        if join && whole {
+            return if self
+                .checker
+                .edge_free(self.chain, tree.config(near), target, scratch)
+            {
+                Step::Arrived
+            } else {
+                Step::Blocked
+            };
         }
         if !self.checker.node_free(self.chain, &work.q_new, scratch)
             || !self
                 .checker
                 .edge_free(self.chain, tree.config(near), &work.q_new, scratch)
         {
-            return None;
+            return Step::Blocked;
         }
-        Some(tree.push(&work.q_new, &work.frames, near))
+        Step::Added(tree.push(&work.q_new, &work.frames, near))
     }
 
+    /// Marks the tasks within tolerance of node `node`'s end effector as reached by it; true
+    /// when there was one.
     fn mark_reached(&self, tree: &Tree, node: u32, reached: &mut [Option<u32>]) -> bool {
         let ee = tree.end_effector(node);
-        let tol2 = self.config.goal_tolerance * self.config.goal_tolerance;
         let mut any = false;
         for (r, t) in reached.iter_mut().zip(self.tasks) {
-            if r.is_none() && (ee - t).norm_squared() <= tol2 {
+            if r.is_none() && self.within_tolerance(&ee, t) {
                 *r = Some(node);
                 any = true;
             }
@@ -273,44 +370,236 @@ impl<'a> Rrt<'a> {
         any
     }
 
-    /// Grows the tree from home for up to `config.max_iterations` iterations (or the time
-    /// cap), until every task is reached. Each iteration either (with probability `goal_bias`)
-    /// picks an unreached task, takes the node whose end effector is nearest to it, computes a
-    /// goal configuration by damped-least-squares steps from there, and extends greedily toward
-    /// it (up to [`CONNECT_STEPS`] steps); when that node was already tried for that task (its
-    /// IK goal and steps would only repeat), the IK starts instead from a configuration sampled
-    /// uniformly in the ranges and the extension from the node nearest (actuation-space
-    /// distance) to its solution: another arm posture for the same point. Otherwise the
-    /// iteration samples a configuration uniformly in the ranges and extends the nearest node
-    /// (actuation-space distance) one step toward it. Every new node passes `node_free` and its
-    /// edge `edge_free`. Deterministic for a given `rng` state.
+    fn within_tolerance(&self, ee: &Point3<f64>, task: &Point3<f64>) -> bool {
+        (ee - task).norm_squared() <= self.config.goal_tolerance * self.config.goal_tolerance
+    }
+
+    /// Extends `tree` greedily from `node` toward `target` for up to [`CONNECT_STEPS`] steps,
+    /// until blocked or (with `join`, `target` being a node of another tree) arrived. With
+    /// `reached`, every new node is marked as reaching the tasks within its tolerance, and the
+    /// extension stops once task `stop_at` is reached. Returns the last node and whether it
+    /// arrived.
+    #[allow(clippy::too_many_arguments)]
+    fn connect(
+        &self,
+        tree: &mut Tree,
+        mut node: u32,
+        target: &[f64],
+        join: bool,
+        mut reached: Option<&mut [Option<u32>]>,
+        stop_at: Option<usize>,
+        work: &mut Work,
+        scratch: &mut Scratch,
+    ) -> (u32, bool) {
+        for _ in 0..CONNECT_STEPS {
+            match self.extend(tree, node, target, join, work, scratch) {
+                Step::Added(n) => {
+                    node = n;
+                    if let Some(r) = reached.as_deref_mut() {
+                        if self.mark_reached(tree, n, r) && stop_at.is_some_and(|j| r[j].is_some())
+                        {
+                            break;
+                        }
+                    }
+                }
+                Step::Arrived => return (node, true),
+                Step::Blocked => break,
+            }
+        }
+        (node, false)
+    }
+
+    /// Grafts backward tree `gi` onto the forward tree, its node `at` linked to forward node
+    /// `onto`, marks the tasks its nodes reach (its own task at least: its root is on it), and
+    /// retires it.
+    fn graft(&self, s: &mut Search, gi: usize, at: u32, onto: u32) {
+        let mut g = s.goals.swap_remove(gi);
+        let offset = s.tree.graft(&g.tree, at, onto);
+        for k in offset..s.tree.len() as u32 {
+            self.mark_reached(&s.tree, k, &mut s.reached);
+        }
+        g.tree.clear();
+        s.spare.push(g.tree);
+        s.joins += 1;
+    }
+
+    /// A goal-biased iteration: picks an unreached task, takes the node whose end effector is
+    /// nearest to it, computes a goal configuration by damped-least-squares steps from there
+    /// and extends greedily toward it. When that node was already tried for that task (its IK
+    /// goal and steps would only repeat), the IK starts instead from a configuration sampled
+    /// uniformly in the ranges: another arm posture. A posture that does not reach the task or
+    /// collides is dropped; one that does becomes the root of a backward tree while the task has
+    /// fewer than `postures`, and the forward tree grows toward it from its node nearest in
+    /// actuation space.
+    fn toward_task(&self, s: &mut Search, rng: &mut ChaCha8Rng, scratch: &mut Scratch) {
+        let chain = self.chain;
+        s.unreached.clear();
+        s.unreached
+            .extend((0..s.reached.len()).filter(|&j| s.reached[j].is_none()));
+        let j = s.unreached[rng.random_range(0..s.unreached.len())];
+        let target = self.tasks[j];
+        let mut node = s.tree.nearest_end_effector(&target);
+        let restart = !s.tried.insert((node, j));
+        let work = &mut s.work;
+        let ik_start: &[f64] = if restart {
+            chain.sample_config(rng, &mut work.q_new);
+            &work.q_new
+        } else {
+            s.tree.config(node)
+        };
+        dls(
+            chain,
+            ik_start,
+            &target,
+            self.config.ik_steps,
+            0.25 * self.config.goal_tolerance,
+            &mut work.ik,
+        );
+        work.q_goal.copy_from_slice(&work.ik.q);
+        let goal = std::mem::take(&mut work.q_goal);
+        let mut join = false;
+        if restart {
+            chain.fk(&goal, &mut work.frames);
+            if !self.within_tolerance(&work.frames.end_effector(), &target)
+                || !self.checker.node_free(chain, &goal, scratch)
+            {
+                work.q_goal = goal;
+                return;
+            }
+            if s.goals.iter().filter(|g| g.task == j).count() < self.config.postures {
+                let mut t = s.spare.pop().unwrap_or_else(|| Tree::new(chain));
+                t.push(&goal, &work.frames, 0);
+                s.goals.push(GoalTree { task: j, tree: t });
+                join = true;
+            }
+            node = s.tree.nearest_config(&goal);
+        }
+        let (last, arrived) = self.connect(
+            &mut s.tree,
+            node,
+            &goal,
+            join,
+            Some(&mut s.reached),
+            Some(j),
+            work,
+            scratch,
+        );
+        s.work.q_goal = goal;
+        if arrived {
+            self.graft(s, s.goals.len() - 1, 0, last);
+        }
+    }
+
+    /// An exploration iteration: samples a configuration uniformly in the ranges and extends
+    /// the nearest node (actuation-space distance) of the forward tree one step toward it. While
+    /// backward trees exist, every other such iteration grows a backward tree instead (chosen at
+    /// random), and after either step the other side tries to join the new node greedily; a
+    /// join grafts the backward tree onto the forward one.
+    fn explore(&self, s: &mut Search, rng: &mut ChaCha8Rng, scratch: &mut Scratch) {
+        self.chain.sample_config(rng, &mut s.work.q_goal);
+        let sample = std::mem::take(&mut s.work.q_goal);
+        if s.goals.is_empty() || !s.backward_turn {
+            let near = s.tree.nearest_config(&sample);
+            let step = self.extend(&mut s.tree, near, &sample, false, &mut s.work, scratch);
+            if let Step::Added(n) = step {
+                self.mark_reached(&s.tree, n, &mut s.reached);
+                if !s.goals.is_empty() {
+                    let gi = rng.random_range(0..s.goals.len());
+                    s.work.q_join.copy_from_slice(s.tree.config(n));
+                    let join = std::mem::take(&mut s.work.q_join);
+                    let g = &mut s.goals[gi].tree;
+                    let from = g.nearest_config(&join);
+                    let (last, arrived) =
+                        self.connect(g, from, &join, true, None, None, &mut s.work, scratch);
+                    s.work.q_join = join;
+                    if arrived {
+                        self.graft(s, gi, last, n);
+                    }
+                }
+            }
+        } else {
+            let gi = rng.random_range(0..s.goals.len());
+            let g = &mut s.goals[gi].tree;
+            let near = g.nearest_config(&sample);
+            if let Step::Added(m) = self.extend(g, near, &sample, false, &mut s.work, scratch) {
+                s.work.q_join.copy_from_slice(g.config(m));
+                let join = std::mem::take(&mut s.work.q_join);
+                let from = s.tree.nearest_config(&join);
+                let (last, arrived) = self.connect(
+                    &mut s.tree,
+                    from,
+                    &join,
+                    true,
+                    Some(&mut s.reached),
+                    None,
+                    &mut s.work,
+                    scratch,
+                );
+                s.work.q_join = join;
+                if arrived {
+                    self.graft(s, gi, m, last);
+                }
+            }
+        }
+        s.backward_turn = !s.backward_turn;
+        s.work.q_goal = sample;
+    }
+
+    /// Grows the forward tree from home until every task is reached, for up to
+    /// `config.max_iterations` iterations, or up to `budget_growth` times as many (at most
+    /// [`MAX_ITERATIONS`]) while an unreached task has a backward tree (a collision-free posture
+    /// on the task is known, so more work is likely to pay), and within the time cap if set.
+    /// Each iteration is, with probability `goal_bias`, a goal-biased one: greedy extensions
+    /// toward IK goals of an unreached task, whose collision-free postures on the task root the
+    /// backward trees (up to `postures` per task). Otherwise it is an exploration one: a uniform
+    /// sample that the forward tree, or every other time a backward tree, grows toward, and a
+    /// greedy attempt of the other side to join the new node; a join grafts the backward tree
+    /// onto the forward one. Every new node passes `node_free` and every new edge `edge_free`.
+    /// Deterministic for a given `rng` state.
     pub fn grow(&self, rng: &mut ChaCha8Rng, scratch: &mut Scratch) -> Growth {
         let chain = self.chain;
-        let mut tree = Tree::new(chain);
-        let mut reached = vec![None; self.tasks.len()];
-        let mut work = Work {
-            frames: chain.frames(),
-            q_new: vec![0.0; chain.dof()],
-            q_goal: vec![0.0; chain.dof()],
-            ik: IkWork::new(chain),
+        let mut s = Search {
+            tree: Tree::new(chain),
+            reached: vec![None; self.tasks.len()],
+            goals: Vec::new(),
+            spare: Vec::new(),
+            tried: HashSet::new(),
+            unreached: Vec::with_capacity(self.tasks.len()),
+            backward_turn: false,
+            joins: 0,
+            work: Work {
+                frames: chain.frames(),
+                q_new: vec![0.0; chain.dof()],
+                q_goal: vec![0.0; chain.dof()],
+                q_join: vec![0.0; chain.dof()],
+                ik: IkWork::new(chain),
+            },
         };
         let home = chain.home().to_vec();
         if !self.checker.node_free(chain, &home, scratch) {
             return Growth {
-                tree,
-                reached,
+                tree: s.tree,
+                reached: s.reached,
                 iterations: 0,
+                joins: 0,
                 home_blocked: true,
             };
         }
-        chain.fk(&home, &mut work.frames);
-        tree.push(&home, &work.frames, 0);
-        self.mark_reached(&tree, 0, &mut reached);
+        chain.fk(&home, &mut s.work.frames);
+        s.tree.push(&home, &s.work.frames, 0);
+        self.mark_reached(&s.tree, 0, &mut s.reached);
+        let base = self.config.max_iterations;
+        let grown = base
+            .saturating_mul(self.config.budget_growth)
+            .min(MAX_ITERATIONS)
+            .max(base);
         let start = Instant::now();
         let mut iterations = 0;
-        let mut unreached: Vec<usize> = Vec::with_capacity(self.tasks.len());
-        let mut tried: HashSet<(u32, usize)> = HashSet::new();
-        while iterations < self.config.max_iterations && reached.iter().any(Option::is_none) {
+        while s.reached.iter().any(Option::is_none) {
+            let budget = if s.goals.is_empty() { base } else { grown };
+            if iterations >= budget {
+                break;
+            }
             if let Some(limit) = self.config.time_limit {
                 if start.elapsed().as_secs_f64() > limit {
                     break;
@@ -321,61 +610,109 @@ impl<'a> Rrt<'a> {
                 break;
             }
             if rng.random::<f64>() < self.config.goal_bias {
-                unreached.clear();
-                unreached.extend((0..reached.len()).filter(|&j| reached[j].is_none()));
-                let j = unreached[rng.random_range(0..unreached.len())];
-                let target = self.tasks[j];
-                let mut node = tree.nearest_end_effector(&target);
-                // The same start toward the same task would repeat the same IK goal and the
-                // same steps: start the IK from a random configuration instead, and grow
-                // toward its solution from the node nearest to it in actuation space.
-                let restart = !tried.insert((node, j));
-                let ik_start: &[f64] = if restart {
-                    chain.sample_config(rng, &mut work.q_new);
-                    &work.q_new
-                } else {
-                    tree.config(node)
-                };
-                dls(
-                    chain,
-                    ik_start,
-                    &target,
-                    self.config.ik_steps,
-                    0.25 * self.config.goal_tolerance,
-                    &mut work.ik,
-                );
-                work.q_goal.copy_from_slice(&work.ik.q);
-                if restart {
-                    node = tree.nearest_config(&work.q_goal);
-                }
-                let goal = std::mem::take(&mut work.q_goal);
-                for _ in 0..CONNECT_STEPS {
-                    match self.extend(&mut tree, node, &goal, &mut work, scratch) {
-                        Some(n) => {
-                            node = n;
-                            if self.mark_reached(&tree, n, &mut reached) && reached[j].is_some() {
-                                break;
-                            }
-                        }
-                        None => break,
-                    }
-                }
-                work.q_goal = goal;
+                self.toward_task(&mut s, rng, scratch);
             } else {
-                chain.sample_config(rng, &mut work.q_goal);
-                let near = tree.nearest_config(&work.q_goal);
-                let goal = std::mem::take(&mut work.q_goal);
-                if let Some(n) = self.extend(&mut tree, near, &goal, &mut work, scratch) {
-                    self.mark_reached(&tree, n, &mut reached);
+                self.explore(&mut s, rng, scratch);
+            }
+            // A task reached by the forward tree retires its backward trees.
+            let mut k = 0;
+            while k < s.goals.len() {
+                if s.reached[s.goals[k].task].is_some() {
+                    let mut g = s.goals.swap_remove(k);
+                    g.tree.clear();
+                    s.spare.push(g.tree);
+                } else {
+                    k += 1;
                 }
-                work.q_goal = goal;
             }
         }
         Growth {
-            tree,
-            reached,
+            tree: s.tree,
+            reached: s.reached,
             iterations,
+            joins: s.joins,
             home_blocked: false,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kinematics::{Axis, Dh, Link, Range};
+    use nalgebra::IsometryMatrix3;
+
+    /// A planar arm of two unit links turning about z.
+    fn arm() -> Chain {
+        let mut r = [Range::ZERO; 6];
+        r[Axis::Rz.index()] = Range::new(-3.0, 3.0);
+        let links = vec![
+            Link::from_dh(&Dh::default(), r),
+            Link::from_dh(
+                &Dh {
+                    a: 1.0,
+                    ..Dh::default()
+                },
+                r,
+            ),
+        ];
+        Chain::new(IsometryMatrix3::identity(), &links, 0.01, 1)
+    }
+
+    fn push(tree: &mut Tree, chain: &Chain, q: &[f64], parent: u32) -> u32 {
+        let mut frames = chain.frames();
+        chain.fk(q, &mut frames);
+        tree.push(q, &frames, parent)
+    }
+
+    #[test]
+    fn a_grafted_tree_is_re_rooted_so_every_node_leads_home() {
+        let chain = arm();
+        let mut main = Tree::new(&chain);
+        push(&mut main, &chain, &[0.0, 0.0], 0);
+        push(&mut main, &chain, &[0.1, 0.0], 0);
+        // Backward tree: root 0 at the goal, 1 and 3 its children, 2 a child of 1.
+        let mut back = Tree::new(&chain);
+        push(&mut back, &chain, &[0.5, 0.5], 0);
+        push(&mut back, &chain, &[0.4, 0.3], 0);
+        push(&mut back, &chain, &[0.2, 0.1], 1);
+        push(&mut back, &chain, &[0.6, 0.7], 0);
+        let offset = main.graft(&back, 2, 1);
+        assert_eq!(offset, 2);
+        assert_eq!(main.len(), 6);
+        let to_goal = main.path_to(offset);
+        assert_eq!(
+            to_goal,
+            vec![
+                vec![0.0, 0.0],
+                vec![0.1, 0.0],
+                vec![0.2, 0.1],
+                vec![0.4, 0.3],
+                vec![0.5, 0.5]
+            ]
+        );
+        let to_side = main.path_to(offset + 3);
+        assert_eq!(to_side[..5], to_goal[..]);
+        assert_eq!(to_side[5], vec![0.6, 0.7]);
+        assert_eq!(
+            main.end_effector(offset + 3),
+            chain.end_effector(&[0.6, 0.7])
+        );
+        assert_eq!(main.positions(offset + 1).len(), chain.link_count());
+    }
+
+    #[test]
+    fn grafting_at_the_root_links_the_root_itself() {
+        let chain = arm();
+        let mut main = Tree::new(&chain);
+        push(&mut main, &chain, &[0.0, 0.0], 0);
+        let mut back = Tree::new(&chain);
+        push(&mut back, &chain, &[0.3, 0.0], 0);
+        push(&mut back, &chain, &[0.6, 0.0], 0);
+        let offset = main.graft(&back, 0, 0);
+        assert_eq!(
+            main.path_to(offset + 1),
+            vec![vec![0.0, 0.0], vec![0.3, 0.0], vec![0.6, 0.0]]
+        );
     }
 }
