@@ -23,6 +23,7 @@ enum Command {
     Reach(cli::reach::Args),
     Urdf(cli::urdf::Args),
     Edges(cli::edges::Args),
+    View(cli::view::Args),
 }
 
 fn main() -> ExitCode {
@@ -34,6 +35,7 @@ fn main() -> ExitCode {
         Command::Reach(a) => cli::reach::run(a),
         Command::Urdf(a) => cli::urdf::run(a),
         Command::Edges(a) => cli::edges::run(a),
+        Command::View(a) => cli::view::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,6 +1,8 @@
 //! The commands of the `kinsynth` binary, one file each: parse the command's options, call the
 //! library, print. `main.rs` only parses the command line and dispatches here.
 
+use std::path::PathBuf;
+
 /// `println!` that ends the process quietly when stdout is closed (e.g. piped into `head`).
 macro_rules! say {
     ($($t:tt)*) => {{
@@ -19,6 +21,7 @@ mod progress;
 pub mod reach;
 pub mod scenario;
 pub mod urdf;
+pub mod view;
 
 /// Applies `--checker` and `--lmax` to the scenario's planner settings (a given `L_max`
 /// replaces any schedule).
@@ -60,5 +63,74 @@ pub fn whole(
             x,
             format!("must be a whole number from {min} to {max}"),
         )),
+    }
+}
+
+/// Options for a robot read from a URDF file instead of a design (`reach`, `view`).
+#[derive(clap::Args)]
+pub struct UrdfRobot {
+    /// Evaluate this URDF robot instead of a design (see the README's "URDF" section).
+    #[arg(long, conflicts_with = "design")]
+    pub urdf: Option<PathBuf>,
+    /// URDF link where the chain starts. Default: the root link.
+    #[arg(long, requires = "urdf")]
+    pub base_frame: Option<String>,
+    /// URDF link whose origin is the end effector. Default: the leaf below the base.
+    #[arg(long, requires = "urdf")]
+    pub tip_frame: Option<String>,
+    /// Capsule radius of the URDF robot's links (m). Default: the largest radius of its
+    /// collision cylinders and spheres, else 0.05.
+    #[arg(long, requires = "urdf")]
+    pub radius: Option<f64>,
+    /// Bodies of the URDF robot's links: `collision` (their <collision> meshes, boxes,
+    /// cylinders, spheres and capsules) or `capsules` (capsules between joint origins).
+    #[arg(long, requires = "urdf", default_value_t = kinsynth::import::BodyChoice::Collision)]
+    pub body: kinsynth::import::BodyChoice,
+    /// Where `package://NAME/…` mesh URIs point: NAME=DIR (repeatable). Default: a folder
+    /// NAME above the URDF.
+    #[arg(long, requires = "urdf", value_parser = package_arg)]
+    pub package: Vec<(String, PathBuf)>,
+    /// An SRDF whose <disable_collisions> link pairs are never checked for self-collision.
+    #[arg(long, requires = "urdf")]
+    pub srdf: Option<PathBuf>,
+}
+
+impl UrdfRobot {
+    /// The URDF robot of `--urdf` with its body, for the scenario `s` (its point colliders and
+    /// self-collision settings), or `None` without `--urdf`. A note from the import goes to
+    /// stderr.
+    pub fn load(
+        &self,
+        s: &kinsynth::Scenario,
+    ) -> Result<Option<kinsynth::import::ImportedRobot>, kinsynth::Error> {
+        let Some(p) = &self.urdf else {
+            return Ok(None);
+        };
+        let options = kinsynth::import::ImportOptions {
+            body: self.body,
+            packages: self.package.clone(),
+            srdf: self.srdf.clone(),
+            self_collision: s.planner.self_collision.clone(),
+        };
+        let r = kinsynth::import::load_robot(
+            p,
+            self.base_frame.as_deref(),
+            self.tip_frame.as_deref(),
+            self.radius,
+            s.space.template().colliders_per_link,
+            &options,
+        )?;
+        if let Some(note) = &r.note {
+            eprintln!("note: {}: {note}", p.display());
+        }
+        Ok(Some(r))
+    }
+}
+
+/// Parses `--package NAME=DIR`.
+fn package_arg(s: &str) -> Result<(String, PathBuf), String> {
+    match s.split_once('=') {
+        Some((n, d)) if !n.is_empty() && !d.is_empty() => Ok((n.to_string(), PathBuf::from(d))),
+        _ => Err(format!("`{s}`: expected NAME=DIR")),
     }
 }

@@ -15,7 +15,8 @@ const MAX_EVALUATIONS: u64 = 1_000_000_000_000;
 ///
 /// Writes into --out (or the --resume directory): best.json (the best design and its
 /// figures), history.csv (one row per generation), reach.json (the best design's
-/// reachability report), convergence.svg (best R and cost against time), robot.urdf (the
+/// reachability report), convergence.svg (best R and cost against time), report.html (the
+/// browser report in 3D: scene, design, paths, cost and settings), robot.urdf (the
 /// best design as URDF), robot.srdf (its planning group and allowed-collision matrix),
 /// trajectories/ (task_{i}.csv and task_{i}.json per reached task)
 /// and checkpoint.json (the state for --resume); .kinsynth.lock exists while the run lasts.

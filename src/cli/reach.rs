@@ -59,25 +59,8 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         (Some(p), None, None) => kinsynth::optimize::runner::Replay::from_best(p)?,
         _ => None,
     };
-    let (chain, urdf_names, body) = match &urdf.urdf {
-        Some(p) => {
-            let options = kinsynth::import::ImportOptions {
-                body: urdf.body,
-                packages: urdf.package.clone(),
-                srdf: urdf.srdf.clone(),
-                self_collision: s.planner.self_collision.clone(),
-            };
-            let r = kinsynth::import::load_robot(
-                p,
-                urdf.base_frame.as_deref(),
-                urdf.tip_frame.as_deref(),
-                urdf.radius,
-                s.space.template().colliders_per_link,
-                &options,
-            )?;
-            if let Some(note) = &r.note {
-                eprintln!("note: {}: {note}", p.display());
-            }
+    let (chain, urdf_names, body) = match urdf.robot.load(&s)? {
+        Some(r) => {
             let body = std::sync::Arc::new(r.body);
             (r.urdf.chain, Some(r.urdf.joint_names), Some(body))
         }
@@ -214,39 +197,9 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
 /// `reach` options for evaluating an existing URDF robot and writing trajectories.
 #[derive(clap::Args)]
 pub struct UrdfReach {
-    /// Evaluate this URDF robot instead of a design (see the README's "URDF" section).
-    #[arg(long, conflicts_with = "design")]
-    pub urdf: Option<PathBuf>,
-    /// URDF link where the chain starts. Default: the root link.
-    #[arg(long, requires = "urdf")]
-    pub base_frame: Option<String>,
-    /// URDF link whose origin is the end effector. Default: the leaf below the base.
-    #[arg(long, requires = "urdf")]
-    pub tip_frame: Option<String>,
-    /// Capsule radius of the URDF robot's links (m). Default: the largest radius of its
-    /// collision cylinders and spheres, else 0.05.
-    #[arg(long, requires = "urdf")]
-    pub radius: Option<f64>,
-    /// Bodies of the URDF robot's links: `collision` (their <collision> meshes, boxes,
-    /// cylinders, spheres and capsules) or `capsules` (capsules between joint origins).
-    #[arg(long, requires = "urdf", default_value_t = kinsynth::import::BodyChoice::Collision)]
-    pub body: kinsynth::import::BodyChoice,
-    /// Where `package://NAME/…` mesh URIs point: NAME=DIR (repeatable). Default: a folder
-    /// NAME above the URDF.
-    #[arg(long, requires = "urdf", value_parser = package_arg)]
-    pub package: Vec<(String, PathBuf)>,
-    /// An SRDF whose <disable_collisions> link pairs are never checked for self-collision.
-    #[arg(long, requires = "urdf")]
-    pub srdf: Option<PathBuf>,
+    #[command(flatten)]
+    pub robot: super::UrdfRobot,
     /// Write task_{index}.csv and task_{index}.json for every reached task into this directory.
     #[arg(long)]
     pub trajectories: Option<PathBuf>,
-}
-
-/// Parses `--package NAME=DIR`.
-fn package_arg(s: &str) -> Result<(String, PathBuf), String> {
-    match s.split_once('=') {
-        Some((n, d)) if !n.is_empty() && !d.is_empty() => Ok((n.to_string(), PathBuf::from(d))),
-        _ => Err(format!("`{s}`: expected NAME=DIR")),
-    }
 }

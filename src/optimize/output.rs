@@ -105,6 +105,9 @@ pub mod files {
     pub const URDF: &str = "robot.urdf";
     /// Its SRDF: planning group and allowed-collision matrix.
     pub const SRDF: &str = "robot.srdf";
+    /// The browser report: the scene, the best design and its paths in 3D, with the run's
+    /// convergence, cost breakdown and settings.
+    pub const REPORT: &str = "report.html";
     /// Folder of the joint trajectories of the best design, one pair of files per reached task.
     pub const TRAJECTORIES: &str = "trajectories";
 }

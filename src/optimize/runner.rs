@@ -452,8 +452,8 @@ impl<'a> Runner<'a> {
 
     /// Runs until a budget is spent, the run converges (`R = 1` and no improvement for
     /// `patience` generations) or `stop` is raised (Ctrl-C); then writes `best.json`,
-    /// `history.csv`, `reach.json`, `convergence.svg`, `robot.urdf`, `trajectories/` and a
-    /// final checkpoint. With `resume`,
+    /// `history.csv`, `reach.json`, `convergence.svg`, `report.html`, `robot.urdf`,
+    /// `trajectories/` and a final checkpoint. With `resume`,
     /// continues from that checkpoint: for the same seed and an evaluation budget, the result
     /// equals that of an uninterrupted run.
     pub fn run(
@@ -810,7 +810,28 @@ impl<'a> Runner<'a> {
             ),
             history,
         );
-        write_atomic(&self.out.join(files::PLOT), svg.as_bytes())
+        write_atomic(&self.out.join(files::PLOT), svg.as_bytes())?;
+        let chain = summary.design.chain();
+        let body =
+            crate::collision::RobotBody::new(&chain, Vec::new(), &summary.planner.self_collision);
+        let view = crate::export::view::ViewInput {
+            title: format!(
+                "{} — {} + {}",
+                self.scenario.name, summary.optimizer, summary.checker
+            ),
+            workspace: &self.scenario.workspace,
+            chain: &chain,
+            body: &body,
+            joint_names: None,
+            design: Some(&summary.design),
+            report: Some(report),
+            run: Some(crate::export::view::RunView {
+                summary,
+                history,
+                convergence_svg: Some(&svg),
+            }),
+        };
+        crate::export::view::write_report(&view, &self.out.join(files::REPORT))
     }
 }
 

@@ -1,0 +1,108 @@
+//! `kinsynth view`: the browser report of a scenario, a robot and its reachability paths.
+
+use kinsynth::export::view::{load_reach, write_report, RunView, ViewInput};
+use kinsynth::Scenario;
+use std::path::PathBuf;
+
+/// Write the 3D report of a scenario and a robot as one self-contained HTML page.
+///
+/// Writes the file given by -o: obstacles as the checker sees them, the task points, the
+/// robot's bodies and, with --reach, each reached task's path as an animation. It opens from
+/// file:// with no network (three.js is inlined).
+#[derive(clap::Args)]
+pub struct Args {
+    /// The scenario file (TOML).
+    pub file: PathBuf,
+    /// A design JSON or an optimiser's best.json (which adds the run's cost and settings).
+    /// Default: the scenario's largest design.
+    #[arg(long)]
+    pub design: Option<PathBuf>,
+    #[command(flatten)]
+    pub robot: super::UrdfRobot,
+    /// A reachability report (`kinsynth reach --json`, or a run's reach.json) of this robot
+    /// in this scenario: its paths are animated.
+    #[arg(long)]
+    pub reach: Option<PathBuf>,
+    /// Output HTML file (written atomically).
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+/// Runs the command.
+pub fn run(args: Args) -> Result<(), kinsynth::Error> {
+    let s = Scenario::load(&args.file)?;
+    let (chain, joint_names, body) = match args.robot.load(&s)? {
+        Some(r) => (r.urdf.chain, Some(r.urdf.joint_names), r.body),
+        None => {
+            let chain = match &args.design {
+                Some(p) => kinsynth::Design::load(p)?.chain(),
+                None => s.space.largest().chain(),
+            };
+            let body =
+                kinsynth::collision::RobotBody::new(&chain, Vec::new(), &s.planner.self_collision);
+            (chain, None, body)
+        }
+    };
+    let design = match (&args.robot.urdf, &args.design) {
+        (Some(_), _) => None,
+        (None, Some(p)) => Some(kinsynth::Design::load(p)?),
+        (None, None) => Some(s.space.largest()),
+    };
+    // A best.json also carries the run's figures.
+    let summary: Option<kinsynth::optimize::RunSummary> = args.design.as_ref().and_then(|p| {
+        let text = kinsynth::limits::read_text(p, kinsynth::limits::MAX_TEXT_FILE_BYTES).ok()?;
+        serde_json::from_str(&text).ok()
+    });
+    let report = match &args.reach {
+        Some(p) => Some(load_reach(p, &s.workspace.tasks, chain.dof())?),
+        None => None,
+    };
+    let title = format!(
+        "{} — {}",
+        s.name,
+        match (&args.robot.urdf, &args.design) {
+            (Some(p), _) | (None, Some(p)) => p.display().to_string(),
+            (None, None) => "largest design".to_string(),
+        }
+    );
+    let input = ViewInput {
+        title,
+        workspace: &s.workspace,
+        chain: &chain,
+        body: &body,
+        joint_names,
+        design: design.as_ref(),
+        report: report.as_ref(),
+        run: summary.as_ref().map(|summary| RunView {
+            summary,
+            history: &[],
+            convergence_svg: None,
+        }),
+    };
+    write_report(&input, &args.output)?;
+    let triangles: usize = s
+        .workspace
+        .obstacles
+        .iter()
+        .map(|o| o.mesh_triangles())
+        .sum();
+    say!(
+        "wrote {} ({} obstacles, {} tasks, {} of them with a path; {} links, {} bodies{})",
+        args.output.display(),
+        s.workspace.obstacles.len(),
+        s.workspace.tasks.len(),
+        report.as_ref().map_or(0, |r| r
+            .targets
+            .iter()
+            .filter(|t| t.reached && t.path.is_some())
+            .count()),
+        chain.link_count(),
+        body.len(),
+        if triangles > 0 {
+            format!(", {triangles} mesh triangles")
+        } else {
+            String::new()
+        }
+    );
+    Ok(())
+}

@@ -1,0 +1,574 @@
+//! The browser report: one self-contained HTML file that shows a scenario, a robot and its
+//! reachability paths in 3D (three.js, vendored under `vendor/` with its licence and embedded
+//! into the binary), with the design, the run's convergence, its Eq. 23 cost breakdown and its
+//! settings beside the view.
+//!
+//! Geometry is drawn as the checker sees it: every obstacle's parry shape (hull, convex
+//! decomposition, triangle mesh or primitive) turned into triangles, and the robot's bodies from
+//! the one body model ([`RobotBody`]: capsule segments and solids). The page does no kinematics:
+//! every animation sample carries the poses the chain's own forward kinematics gives there, the
+//! same as the checker's, sampled along the straight actuation-space edges of each path.
+//!
+//! Large arrays (vertices, indices, samples) travel as base64 of little-endian `f32` / `u32`,
+//! so a 100,000-triangle mesh costs about 2 MB of page.
+
+use crate::collision::body::{Placed, RobotBody};
+use crate::design::Design;
+use crate::error::Result;
+use crate::kinematics::{Chain, Frames};
+use crate::optimize::output::{HistoryRow, RunSummary};
+use crate::planning::ReachReport;
+use crate::world::Workspace;
+use base64::Engine as _;
+use nalgebra::{IsometryMatrix3, UnitQuaternion};
+use parry3d_f64::math::{Pose, Vector};
+use parry3d_f64::shape::Shape;
+use serde_json::{json, Value};
+use std::path::Path;
+
+/// three.js (r170, MIT), the module build.
+const THREE_JS: &str = include_str!("vendor/three.module.min.js");
+/// three.js's orbit controls (r170, MIT).
+const ORBIT_CONTROLS_JS: &str = include_str!("vendor/OrbitControls.js");
+/// The page: markup, style and the viewer script, with placeholders for the data and libraries.
+const PAGE: &str = include_str!("page.html");
+
+/// Most animation samples along one path (the path's own points are always among them).
+pub const MAX_SAMPLES_PER_PATH: usize = 400;
+/// Samples per straight edge of a path before the per-path cap applies.
+pub const SAMPLES_PER_EDGE: usize = 8;
+/// Subdivisions of round primitives (balls, capsules, cylinders) around their axis.
+const ROUND_SUBDIVISIONS: u32 = 32;
+
+/// The results of an optimisation run, for the report's convergence curve, cost breakdown and
+/// settings.
+#[derive(Clone, Copy)]
+pub struct RunView<'a> {
+    /// The run's summary (`best.json`).
+    pub summary: &'a RunSummary,
+    /// Its history rows (`history.csv`).
+    pub history: &'a [HistoryRow],
+    /// The convergence plot (`convergence.svg`), shown as it is.
+    pub convergence_svg: Option<&'a str>,
+}
+
+/// What one report page shows.
+pub struct ViewInput<'a> {
+    /// Title of the page (scenario name and what is shown).
+    pub title: String,
+    /// The obstacles and tasks.
+    pub workspace: &'a Workspace,
+    /// The robot's kinematics.
+    pub chain: &'a Chain,
+    /// The robot's bodies as the checker sees them.
+    pub body: &'a RobotBody,
+    /// URDF joint names of the chain's free axes, when it came from a URDF (else `j{i}_{axis}`).
+    pub joint_names: Option<Vec<String>>,
+    /// The design, for the design table (absent for a URDF robot).
+    pub design: Option<&'a Design>,
+    /// The reachability report whose paths are animated (absent: the robot stands at home).
+    pub report: Option<&'a ReachReport>,
+    /// The optimisation run, when the report belongs to one.
+    pub run: Option<RunView<'a>>,
+}
+
+/// Little-endian bytes of `values` as base64.
+fn b64_f32(values: &[f32]) -> String {
+    let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+    base64::engine::general_purpose::STANDARD.encode(bytes)
+}
+
+/// Little-endian bytes of `values` as base64.
+fn b64_u32(values: &[u32]) -> String {
+    let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+    base64::engine::general_purpose::STANDARD.encode(bytes)
+}
+
+/// A triangle mesh in some local frame: flat `xyz` vertex coordinates and triangle indices.
+#[derive(Default)]
+struct Mesh {
+    vertices: Vec<f32>,
+    indices: Vec<u32>,
+}
+
+impl Mesh {
+    /// Appends `vertices` (moved by `pose`) and `triangles`.
+    fn append(&mut self, pose: &Pose, vertices: &[Vector], triangles: &[[u32; 3]]) {
+        let base = (self.vertices.len() / 3) as u32;
+        for v in vertices {
+            let p = pose.transform_point(*v);
+            self.vertices
+                .extend_from_slice(&[p.x as f32, p.y as f32, p.z as f32]);
+        }
+        for t in triangles {
+            self.indices
+                .extend_from_slice(&[base + t[0], base + t[1], base + t[2]]);
+        }
+    }
+
+    /// Number of triangles.
+    fn triangles(&self) -> usize {
+        self.indices.len() / 3
+    }
+
+    /// The mesh as page data.
+    fn to_json(&self) -> Value {
+        json!({
+            "vertices": b64_f32(&self.vertices),
+            "indices": b64_u32(&self.indices),
+            "triangles": self.triangles(),
+        })
+    }
+}
+
+/// Adds the triangles of `shape` (placed at `pose` in the mesh's frame) to `mesh`, and returns
+/// false for a shape kind the page cannot draw (it then gets its bounding box).
+fn add_shape(mesh: &mut Mesh, pose: &Pose, shape: &dyn Shape) -> bool {
+    let n = ROUND_SUBDIVISIONS;
+    let (v, t) = if let Some(s) = shape.as_trimesh() {
+        mesh.append(pose, s.vertices(), s.indices());
+        return true;
+    } else if let Some(c) = shape.as_compound() {
+        let mut known = true;
+        for (part_pose, part) in c.shapes() {
+            known &= add_shape(mesh, &(*pose * *part_pose), part.as_ref());
+        }
+        return known;
+    } else if let Some(s) = shape.as_convex_polyhedron() {
+        s.to_trimesh()
+    } else if let Some(s) = shape.as_ball() {
+        s.to_trimesh(n, n / 2)
+    } else if let Some(s) = shape.as_capsule() {
+        s.to_trimesh(n, n / 4)
+    } else if let Some(s) = shape.as_cuboid() {
+        s.to_trimesh()
+    } else if let Some(s) = shape.as_cylinder() {
+        s.to_trimesh(n)
+    } else {
+        let aabb = shape.compute_local_aabb();
+        let centre = Pose::from_translation(aabb.center());
+        let (v, t) = parry3d_f64::shape::Cuboid::new(aabb.half_extents()).to_trimesh();
+        mesh.append(&(*pose * centre), &v, &t);
+        return false;
+    };
+    mesh.append(pose, &v, &t);
+    true
+}
+
+/// Position and quaternion (`x y z w`) of a parry pose, as `f32`.
+fn pose7(p: &Pose) -> [f32; 7] {
+    let (t, q) = (p.translation, p.rotation);
+    [
+        t.x as f32, t.y as f32, t.z as f32, q.x as f32, q.y as f32, q.z as f32, q.w as f32,
+    ]
+}
+
+/// Position and quaternion (`x y z w`) of a frame, as `f32`.
+fn iso7(iso: &IsometryMatrix3<f64>) -> [f32; 7] {
+    let q = UnitQuaternion::from_rotation_matrix(&iso.rotation);
+    let t = iso.translation.vector;
+    [
+        t.x as f32, t.y as f32, t.z as f32, q.i as f32, q.j as f32, q.k as f32, q.w as f32,
+    ]
+}
+
+/// Floats per animation sample: the end effector (3), each capsule segment's two ends (6
+/// each), each solid's pose (7 each) and each frame `F_0 … F_n`'s pose (7 each).
+fn sample_stride(chain: &Chain, body: &RobotBody) -> usize {
+    3 + 6 * body.segments() + 7 * body.solids().len() + 7 * (chain.link_count() + 1)
+}
+
+/// Appends one animation sample of configuration `a` to `out` (see [`sample_stride`]).
+fn push_sample(
+    chain: &Chain,
+    body: &RobotBody,
+    a: &[f64],
+    frames: &mut Frames,
+    placed: &mut Placed,
+    out: &mut Vec<f32>,
+) {
+    chain.fk(a, frames);
+    body.place(frames, placed);
+    let ee = frames.end_effector();
+    out.extend_from_slice(&[ee.x as f32, ee.y as f32, ee.z as f32]);
+    for [p, q] in &frames.segments[..body.segments()] {
+        out.extend([p.x, p.y, p.z, q.x, q.y, q.z].iter().map(|&c| c as f32));
+    }
+    for pose in &placed.poses {
+        out.extend_from_slice(&pose7(pose));
+    }
+    for f in &frames.frames {
+        out.extend_from_slice(&iso7(f));
+    }
+}
+
+/// The configurations shown along a path: its points, and between each two of them samples
+/// on the straight actuation-space edge the planner checked, at most
+/// [`MAX_SAMPLES_PER_PATH`] in all, spread by edge length.
+fn path_configurations(points: &[Vec<f64>]) -> Vec<Vec<f64>> {
+    let edges = points.len().saturating_sub(1);
+    if edges == 0 {
+        return points.to_vec();
+    }
+    let lengths: Vec<f64> = points
+        .windows(2)
+        .map(|w| {
+            w[0].iter()
+                .zip(&w[1])
+                .map(|(a, b)| (a - b) * (a - b))
+                .sum::<f64>()
+                .sqrt()
+        })
+        .collect();
+    let total: f64 = lengths.iter().sum();
+    let budget = (SAMPLES_PER_EDGE * edges).min(MAX_SAMPLES_PER_PATH.max(edges + 1) - 1);
+    let mut out = vec![points[0].clone()];
+    for (k, w) in points.windows(2).enumerate() {
+        let steps = if total > 0.0 {
+            ((lengths[k] / total) * budget as f64).round().max(1.0) as usize
+        } else {
+            1
+        };
+        for s in 1..=steps {
+            let t = s as f64 / steps as f64;
+            out.push(
+                w[0].iter()
+                    .zip(&w[1])
+                    .map(|(a, b)| a + t * (b - a))
+                    .collect(),
+            );
+        }
+    }
+    out
+}
+
+/// Most path points a report may carry over all its paths.
+pub const MAX_PATH_POINTS: usize = 200_000;
+
+/// Reads a reachability report (`kinsynth reach --json`, or a run's `reach.json`) to show with
+/// a robot of `dof` free axes among `tasks`, checking that it belongs to them: one target per
+/// task, at the task's point, each path point with `dof` values, all finite. Errors name the
+/// file, the field (`targets[2].path.points[5]`) and the value.
+pub fn load_reach(path: &Path, tasks: &[nalgebra::Point3<f64>], dof: usize) -> Result<ReachReport> {
+    use crate::error::Error;
+    let text =
+        crate::limits::read_text(path, crate::limits::MAX_TEXT_FILE_BYTES).map_err(|source| {
+            Error::Read {
+                path: path.to_path_buf(),
+                source,
+            }
+        })?;
+    let mut de = serde_json::Deserializer::from_str(&text);
+    let report: ReachReport =
+        serde_path_to_error::deserialize(&mut de).map_err(|e| Error::Parse {
+            file: path.to_path_buf(),
+            message: format!("{}: {}", e.path(), e.inner()),
+        })?;
+    let bad = |field: String, value: String, reason: String| {
+        Error::invalid(field, value, reason).in_file(path)
+    };
+    if report.targets.len() != tasks.len() {
+        return Err(bad(
+            "targets".into(),
+            format!("{} entries", report.targets.len()),
+            format!("the scenario has {} tasks", tasks.len()),
+        ));
+    }
+    let mut total = 0usize;
+    for (i, t) in report.targets.iter().enumerate() {
+        if t.index != i {
+            return Err(bad(
+                format!("targets[{i}].index"),
+                t.index.to_string(),
+                format!("must be {i} (one target per task, in scenario order)"),
+            ));
+        }
+        let p = tasks[i];
+        let d =
+            ((t.point[0] - p.x).powi(2) + (t.point[1] - p.y).powi(2) + (t.point[2] - p.z).powi(2))
+                .sqrt();
+        if d.is_nan() || d > 1e-9 {
+            return Err(bad(
+                format!("targets[{i}].point"),
+                format!("{:?}", t.point),
+                format!("is not task {i} of the scenario, {:?}", [p.x, p.y, p.z]),
+            ));
+        }
+        let Some(path) = &t.path else { continue };
+        total = total.saturating_add(path.points.len());
+        if total > MAX_PATH_POINTS {
+            return Err(bad(
+                format!("targets[{i}].path.points"),
+                format!("{total} points so far"),
+                format!("a report may carry at most {MAX_PATH_POINTS} path points"),
+            ));
+        }
+        for (j, q) in path.points.iter().enumerate() {
+            if q.len() != dof || !q.iter().all(|v| v.is_finite()) {
+                return Err(bad(
+                    format!("targets[{i}].path.points[{j}]"),
+                    format!("{q:?}"),
+                    format!("must be {dof} finite joint values (the robot has {dof} joints)"),
+                ));
+            }
+        }
+    }
+    Ok(report)
+}
+
+/// The page data of `input` (what the page's script reads), as JSON.
+pub fn view_data(input: &ViewInput) -> Value {
+    let ws = input.workspace;
+    let obstacles: Vec<Value> = ws
+        .obstacles
+        .iter()
+        .map(|o| {
+            let mut mesh = Mesh::default();
+            let drawn = add_shape(&mut mesh, &Pose::IDENTITY, o.shape().as_ref());
+            let representation = match &o.geometry {
+                crate::world::obstacle::ObstacleShape::Mesh { representation, .. } => {
+                    representation.name()
+                }
+                g => g.kind(),
+            };
+            let mut v = mesh.to_json();
+            v["name"] = o.name.clone().into();
+            v["kind"] = o.geometry.kind().into();
+            v["representation"] = representation.into();
+            v["pose"] = pose7(o.pose()).to_vec().into();
+            v["exact"] = drawn.into();
+            v
+        })
+        .collect();
+    let chain = input.chain;
+    let body = input.body;
+    let mut frames = chain.frames();
+    let mut placed = Placed::default();
+    let mut home = Vec::new();
+    push_sample(
+        chain,
+        body,
+        chain.home(),
+        &mut frames,
+        &mut placed,
+        &mut home,
+    );
+    let segments: Vec<Value> = (0..body.segments())
+        .map(|s| {
+            json!({
+                "radius": body.radius(s),
+                "link": body.link(s),
+                "frame": body.frame(s),
+            })
+        })
+        .collect();
+    let solids: Vec<Value> = body
+        .solids()
+        .iter()
+        .enumerate()
+        .map(|(k, s)| {
+            // Local to the solid: its placed world pose is sampled per frame.
+            let mut mesh = Mesh::default();
+            add_shape(&mut mesh, &Pose::IDENTITY, s.shape.as_ref());
+            let mut v = mesh.to_json();
+            v["link"] = body.link(body.segments() + k).into();
+            v["frame"] = s.frame.clone().into();
+            v
+        })
+        .collect();
+    let reached: Vec<Option<&crate::planning::reach::TargetReport>> = (0..ws.tasks.len())
+        .map(|i| {
+            input
+                .report
+                .and_then(|r| r.targets.iter().find(|t| t.index == i))
+        })
+        .collect();
+    let tasks: Vec<Value> = ws
+        .tasks
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let t = reached[i];
+            json!({
+                "index": i,
+                "point": [p.x, p.y, p.z],
+                "reached": t.is_some_and(|t| t.reached),
+                "error": t.map(|t| t.error),
+                "end_effector": t.map(|t| t.end_effector),
+            })
+        })
+        .collect();
+    let mut paths = Vec::new();
+    if let Some(report) = input.report {
+        for t in &report.targets {
+            let Some(path) = t.path.as_ref().filter(|_| t.reached) else {
+                continue;
+            };
+            if path.points.iter().any(|p| p.len() != chain.dof()) {
+                continue;
+            }
+            let configs = path_configurations(&path.points);
+            let mut data = Vec::with_capacity(configs.len() * sample_stride(chain, body));
+            for a in &configs {
+                push_sample(chain, body, a, &mut frames, &mut placed, &mut data);
+            }
+            paths.push(json!({
+                "task": t.index,
+                "points": path.points.len(),
+                "samples": configs.len(),
+                "data": b64_f32(&data),
+            }));
+        }
+    }
+    let joint_names = input
+        .joint_names
+        .clone()
+        .unwrap_or_else(|| chain.joint_names());
+    let design = input.design.map(|d| {
+        let links: Vec<Value> = d
+            .links
+            .iter()
+            .enumerate()
+            .map(|(i, l)| {
+                let axes: Vec<Value> = crate::kinematics::Axis::ALL
+                    .iter()
+                    .zip(l.axes.0.iter())
+                    .filter(|(_, r)| r.max > r.min || r.min != 0.0)
+                    .map(|(axis, r)| json!({"axis": axis.name(), "min": r.min, "max": r.max}))
+                    .collect();
+                json!({
+                    "link": i + 1,
+                    "a": l.a,
+                    "d": l.d,
+                    "alpha": l.alpha,
+                    "theta": l.theta,
+                    "length": l.a.abs() + l.d.abs(),
+                    "axes": axes,
+                })
+            })
+            .collect();
+        json!({
+            "links": links,
+            "total_length": d.total_length(),
+            "links_kept": d.links_kept(),
+            "joints_kept": d.joints_kept(),
+            "link_radius": d.link_radius,
+        })
+    });
+    let run = input.run.map(|r| {
+        let s = r.summary;
+        json!({
+            "seed": s.seed,
+            "optimizer": s.optimizer,
+            "checker": s.checker,
+            "l_max": s.l_max,
+            "elapsed_s": s.elapsed_s,
+            "evaluations": s.evaluations,
+            "generations": s.generations,
+            "stopped": s.stopped,
+            "cost": s.cost,
+            "reachability": s.reachability,
+            "breakdown": s.breakdown,
+            "robust_reachability": s.robust_reachability,
+            "history": r.history.iter().map(|h| [h.elapsed_s, h.best_reachability, h.best_cost]).collect::<Vec<_>>(),
+            "convergence_svg": r.convergence_svg.map(|svg| base64::engine::general_purpose::STANDARD.encode(svg)),
+        })
+    });
+    let reach = input.report.map(|r| {
+        json!({
+            "reachability": r.reachability,
+            "checker": r.checker,
+            "l_max": r.l_max,
+            "seed": r.seed,
+            "iterations": r.iterations,
+            "nodes": r.nodes,
+            "edge_checks": r.edge_checks,
+            "home_blocked": r.home_blocked,
+        })
+    });
+    json!({
+        "format": "kinsynth-view 1",
+        "title": input.title,
+        "clearance": ws.clearance,
+        "obstacles": obstacles,
+        "tasks": tasks,
+        "robot": {
+            "links": chain.link_count(),
+            "dof": chain.dof(),
+            "joint_names": joint_names,
+            "segments": segments,
+            "solids": solids,
+            "frames": chain.link_count() + 1,
+            "stride": sample_stride(chain, body),
+            "home": b64_f32(&home),
+        },
+        "paths": paths,
+        "design": design,
+        "reach": reach,
+        "run": run,
+    })
+}
+
+/// The report page of `input`: one HTML file with everything inlined (three.js, the data, the
+/// viewer), which opens from `file://` with no network.
+pub fn report_html(input: &ViewInput) -> String {
+    // `<` never appears outside JSON strings, where `\u003c` means the same: no `</script>`
+    // can end the data block early.
+    let data = serde_json::to_string(&view_data(input))
+        .expect("page data serialises")
+        .replace('<', "\\u003c");
+    let title = html_escape(&input.title);
+    PAGE.replacen("{{TITLE}}", &title, 1)
+        .replacen("{{THREE}}", &script_text(THREE_JS), 1)
+        .replacen("{{ORBIT}}", &script_text(ORBIT_CONTROLS_JS), 1)
+        .replacen("{{DATA}}", &data, 1)
+}
+
+/// Writes the report page of `input` to `path` (atomically).
+pub fn write_report(input: &ViewInput, path: &Path) -> Result<()> {
+    crate::io::write_atomic(path, report_html(input).as_bytes())
+}
+
+/// Text for a non-executed `<script>` block: `</script` cannot occur in it (the vendored
+/// files contain none; should one, `<\/` means the same in every JavaScript string and regex).
+fn script_text(js: &str) -> String {
+    js.replace("</script", "<\\/script")
+}
+
+/// `text` with the HTML special characters escaped.
+fn html_escape(text: &str) -> String {
+    text.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn path_configurations_keep_the_points_and_respect_the_cap() {
+        let points = vec![vec![0.0, 0.0], vec![1.0, 0.0], vec![1.0, 3.0]];
+        let c = path_configurations(&points);
+        assert_eq!(c.first(), points.first());
+        assert_eq!(c.last(), points.last());
+        assert!(c.contains(&points[1]));
+        assert_eq!(c.len(), 1 + 2 * SAMPLES_PER_EDGE);
+        let long: Vec<Vec<f64>> = (0..1000).map(|i| vec![i as f64]).collect();
+        let c = path_configurations(&long);
+        assert_eq!(
+            c.len(),
+            1000,
+            "every point, nothing between, when over the cap"
+        );
+        assert_eq!(path_configurations(&[vec![1.0]]), vec![vec![1.0]]);
+    }
+
+    #[test]
+    fn vendored_scripts_have_no_closing_script_tag() {
+        assert!(!THREE_JS.contains("</script"));
+        assert!(!ORBIT_CONTROLS_JS.contains("</script"));
+        assert!(PAGE.contains("{{DATA}}") && PAGE.contains("{{THREE}}"));
+    }
+}

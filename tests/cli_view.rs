@@ -1,0 +1,112 @@
+//! `kinsynth view` through the command line without a browser: what it writes, and one-line
+//! errors naming the file and the field for a reach report that does not belong to the robot or
+//! the scenario, with nothing written.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const BIN: &str = env!("CARGO_BIN_EXE_kinsynth");
+
+fn scenario(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("examples/scenarios/{name}.toml"))
+}
+
+fn kinsynth(args: &[&std::ffi::OsStr]) -> std::process::Output {
+    Command::new(BIN).args(args).output().unwrap()
+}
+
+#[test]
+fn view_writes_one_self_contained_page() {
+    let dir = tempfile::tempdir().unwrap();
+    let page = dir.path().join("glovebox.html");
+    let o = kinsynth(&[
+        "view".as_ref(),
+        scenario("glovebox").as_os_str(),
+        "-o".as_ref(),
+        page.as_os_str(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let html = std::fs::read_to_string(&page).unwrap();
+    assert!(html.starts_with("<!DOCTYPE html>"));
+    // Everything inline: no script or stylesheet is fetched from anywhere.
+    assert!(!html.contains("<script src"), "an external script");
+    assert!(!html.contains("<link "), "an external resource");
+    assert!(!html.contains("https://"), "a network address");
+    assert!(
+        html.contains("three.js authors") || html.contains("REVISION"),
+        "three.js inlined"
+    );
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        stdout.contains("2 obstacles, 4 tasks, 0 of them with a path"),
+        "{stdout}"
+    );
+}
+
+#[test]
+fn a_reach_report_of_another_robot_or_scenario_is_a_one_line_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let reach = dir.path().join("reach.json");
+    let o = kinsynth(&[
+        "reach".as_ref(),
+        scenario("ur5-cell").as_os_str(),
+        "--json".as_ref(),
+        reach.as_os_str(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let page = dir.path().join("page.html");
+    let cases: [(&str, &[&str], &str); 3] = [
+        // Another scenario: 8 targets for 4 tasks.
+        (
+            "glovebox",
+            &[],
+            "targets = 8 entries: the scenario has 4 tasks",
+        ),
+        // Another robot: the UR5 has 6 joints, the largest design 12.
+        (
+            "ur5-cell",
+            &["--urdf", "examples/robots/ur5.urdf"],
+            "targets[0].path.points[0] = ",
+        ),
+        ("ur5-cell", &["--design", "Cargo.toml"], "Cargo.toml"),
+    ];
+    for (name, extra, message) in cases {
+        let mut args: Vec<&std::ffi::OsStr> = vec!["view".as_ref()];
+        let s = scenario(name);
+        args.push(s.as_os_str());
+        args.extend(extra.iter().map(|a| std::ffi::OsStr::new(a)));
+        args.extend([
+            "--reach".as_ref(),
+            reach.as_os_str(),
+            "-o".as_ref(),
+            page.as_os_str(),
+        ]);
+        let o = Command::new(BIN)
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .args(&args)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{name} {extra:?}: accepted");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(err.contains(message), "{name} {extra:?}: {err}");
+        assert!(!page.exists(), "nothing is written");
+    }
+    // A report whose task points differ from the scenario's.
+    let text = std::fs::read_to_string(&reach).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    v["targets"][2]["point"][0] = 9.5.into();
+    std::fs::write(&reach, v.to_string()).unwrap();
+    let o = kinsynth(&[
+        "view".as_ref(),
+        scenario("ur5-cell").as_os_str(),
+        "--reach".as_ref(),
+        reach.as_os_str(),
+        "-o".as_ref(),
+        page.as_os_str(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(err.contains("reach.json: targets[2].point = [9.5"), "{err}");
+    assert!(!page.exists());
+}
