@@ -74,7 +74,7 @@ fn a_reach_report_of_another_robot_or_scenario_is_a_one_line_error() {
         let mut args: Vec<&std::ffi::OsStr> = vec!["view".as_ref()];
         let s = scenario(name);
         args.push(s.as_os_str());
-        args.extend(extra.iter().map(|a| std::ffi::OsStr::new(a)));
+        args.extend(extra.iter().map(std::ffi::OsStr::new));
         args.extend([
             "--reach".as_ref(),
             reach.as_os_str(),
