@@ -247,6 +247,9 @@ struct Search {
     /// The forward tree, rooted at home.
     tree: Tree,
     reached: Vec<Option<u32>>,
+    /// Tasks farther from the base than the chain can reach ([`Chain::reach_bound`] plus the
+    /// goal tolerance): never targeted, and not waited for.
+    beyond: Vec<bool>,
     /// Backward trees of unreached tasks.
     goals: Vec<GoalTree>,
     /// Emptied backward trees, kept for their buffers.
@@ -363,6 +366,11 @@ impl<'a> Rrt<'a> {
         let mut any = false;
         for (r, t) in reached.iter_mut().zip(self.tasks) {
             if r.is_none() && self.within_tolerance(&ee, t) {
+                debug_assert!(
+                    (t - self.chain.base().translation.vector).coords.norm()
+                        <= self.chain.reach_bound() + self.config.goal_tolerance + 1e-9,
+                    "a task beyond the reach bound was reached"
+                );
                 *r = Some(node);
                 any = true;
             }
@@ -435,7 +443,7 @@ impl<'a> Rrt<'a> {
         let chain = self.chain;
         s.unreached.clear();
         s.unreached
-            .extend((0..s.reached.len()).filter(|&j| s.reached[j].is_none()));
+            .extend((0..s.reached.len()).filter(|&j| s.reached[j].is_none() && !s.beyond[j]));
         let j = s.unreached[rng.random_range(0..s.unreached.len())];
         let target = self.tasks[j];
         let mut node = s.tree.nearest_end_effector(&target);
@@ -545,7 +553,19 @@ impl<'a> Rrt<'a> {
         s.work.q_goal = sample;
     }
 
-    /// Grows the forward tree from home until every task is reached, for up to
+    /// For each task, whether it lies farther from the base origin than
+    /// [`Chain::reach_bound`] plus the goal tolerance: no configuration reaches it.
+    fn beyond_reach(&self) -> Vec<bool> {
+        let origin = Point3::from(self.chain.base().translation.vector);
+        let limit = self.chain.reach_bound() + self.config.goal_tolerance;
+        self.tasks
+            .iter()
+            .map(|t| (t - origin).norm() > limit * (1.0 + 1e-12) + 1e-12)
+            .collect()
+    }
+
+    /// Grows the forward tree from home until every task is reached (every task within the
+    /// chain's reach bound: the others cannot be, see [`Chain::reach_bound`]), for up to
     /// `config.max_iterations` iterations, or up to `budget_growth` times as many (at most
     /// [`MAX_ITERATIONS`]) while an unreached task has a backward tree (a collision-free posture
     /// on the task is known, so more work is likely to pay), and within the time cap if set.
@@ -561,6 +581,7 @@ impl<'a> Rrt<'a> {
         let mut s = Search {
             tree: Tree::new(chain),
             reached: vec![None; self.tasks.len()],
+            beyond: self.beyond_reach(),
             goals: Vec::new(),
             spare: Vec::new(),
             tried: HashSet::new(),
@@ -595,7 +616,7 @@ impl<'a> Rrt<'a> {
             .max(base);
         let start = Instant::now();
         let mut iterations = 0;
-        while s.reached.iter().any(Option::is_none) {
+        while s.reached.iter().zip(&s.beyond).any(|(r, &b)| r.is_none() && !b) {
             let budget = if s.goals.is_empty() { base } else { grown };
             if iterations >= budget {
                 break;
