@@ -616,7 +616,12 @@ impl<'a> Rrt<'a> {
             .max(base);
         let start = Instant::now();
         let mut iterations = 0;
-        while s.reached.iter().zip(&s.beyond).any(|(r, &b)| r.is_none() && !b) {
+        while s
+            .reached
+            .iter()
+            .zip(&s.beyond)
+            .any(|(r, &b)| r.is_none() && !b)
+        {
             let budget = if s.goals.is_empty() { base } else { grown };
             if iterations >= budget {
                 break;
