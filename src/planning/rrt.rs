@@ -667,6 +667,47 @@ mod tests {
     use super::*;
     use crate::kinematics::{Axis, Dh, Link, Range};
     use nalgebra::IsometryMatrix3;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(300))]
+        /// The scan with early exit returns the index a full scan returns (the first of the
+        /// nearest points), at every dimension from 1 to 13 and with duplicate points.
+        #[test]
+        fn nearest_linear_matches_a_full_scan(
+            dim in 1usize..14,
+            n in 1usize..200,
+            seed in any::<u64>(),
+        ) {
+            use rand::SeedableRng;
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            let mut points: Vec<f64> = (0..n * dim).map(|_| rng.random_range(-3.0..3.0)).collect();
+            // Repeat some points, so that ties occur.
+            for k in (dim..points.len()).step_by(7 * dim) {
+                let (head, rest) = points.split_at_mut(k);
+                rest[..dim].copy_from_slice(&head[..dim]);
+            }
+            let q: Vec<f64> = if seed % 3 == 0 {
+                points[..dim].to_vec()
+            } else {
+                (0..dim).map(|_| rng.random_range(-3.0..3.0)).collect()
+            };
+            let mut best = (f64::INFINITY, 0);
+            for (i, c) in points.chunks_exact(dim).enumerate() {
+                let d: f64 = c.iter().zip(&q).map(|(a, b)| (a - b) * (a - b)).sum();
+                if d < best.0 {
+                    best = (d, i);
+                }
+            }
+            let found = nearest_linear(&points, &q);
+            let d = |i: usize| -> f64 {
+                points[i * dim..(i + 1) * dim].iter().zip(&q).map(|(a, b)| (a - b) * (a - b)).sum()
+            };
+            // The same point, or (rounding of the sums differs) one at the same distance.
+            prop_assert!(found == best.1 || (d(found) - best.0).abs() <= 1e-12 * (1.0 + best.0));
+            prop_assert!(found <= best.1 || (d(found) - best.0).abs() <= 1e-12 * (1.0 + best.0));
+        }
+    }
 
     /// A planar arm of two unit links turning about z.
     fn arm() -> Chain {
