@@ -62,7 +62,7 @@ pub fn methods(preset: Preset) -> Vec<Method> {
                 )
             },
             m(
-                "ASA discrete pi/40, this planner",
+                "ASA discrete pi/40 with this planner",
                 Algorithm::Asa,
                 CheckerKind::Discrete,
                 PI / 40.0,
