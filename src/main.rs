@@ -523,17 +523,18 @@ fn run(cli: Cli) -> Result<(), kinsynth::Error> {
             seed,
             out,
         } => {
-            use kinsynth::optimize::experiment::{median, methods, run_experiment};
-            if !(time_limit.is_finite() && time_limit > 0.0) {
-                return Err(kinsynth::Error::invalid(
-                    "--time-limit",
-                    time_limit,
-                    "must be positive and finite",
-                ));
-            }
-            let records = run_experiment(p, runs, time_limit, seed, &out, &mut |line| {
-                eprintln!("{line}")
-            })?;
+            use kinsynth::optimize::experiment::{
+                median, methods, run_experiment, ExperimentSpec, Shard,
+            };
+            let spec = ExperimentSpec {
+                preset: p,
+                runs,
+                time_limit,
+                evaluations: None,
+                seed,
+            };
+            let records =
+                run_experiment(&spec, Shard::WHOLE, &out, &mut |line| eprintln!("{line}"))?;
             say!(
                 "{} runs of {} s written to {}",
                 records.len(),
