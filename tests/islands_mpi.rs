@@ -147,7 +147,7 @@ fn two_ranks_give_the_same_result_twice_migrate_and_resume_after_kill_9() {
     // kill -9 rank 0 (its pid is in the lock file) after its third checkpoint; mpirun ends the
     // job, and the last checkpoint resumes it to the uninterrupted result.
     let killed = dir.path().join("killed");
-    let mut job = optimize(2, &scenario, &killed, &["--checkpoint-interval", "0"])
+    let job = optimize(2, &scenario, &killed, &["--checkpoint-interval", "0"])
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()

@@ -278,3 +278,83 @@ fn fk_matches_independent_matrix_product_on_the_paper_chains() {
         compare_at_random_configurations(&s.space.decode(&x), 3);
     }
 }
+
+#[test]
+fn the_reach_bound_covers_every_configuration_and_is_tight_for_a_stretched_arm() {
+    let mut rng = ChaCha8Rng::seed_from_u64(23);
+    for trial in 0..20 {
+        let mut links = Vec::new();
+        for _ in 0..rng.random_range(1..7) {
+            let mut axes = Vec::new();
+            for axis in Axis::ALL {
+                match rng.random_range(0..3) {
+                    0 => {}
+                    1 => axes.push((
+                        axis,
+                        rng.random_range(-1.5..0.0),
+                        rng.random_range(0.0..1.0),
+                    )),
+                    _ => {
+                        let v = rng.random_range(-0.5..0.5);
+                        axes.push((axis, v, v));
+                    }
+                }
+            }
+            links.push(link(
+                rng.random_range(-PI..PI),
+                rng.random_range(-0.5..0.5),
+                rng.random_range(0.0..0.6),
+                rng.random_range(-PI..PI),
+                &axes,
+            ));
+        }
+        let mut d = design(links);
+        d.base = Placement {
+            position: [0.3, -0.2, 0.1],
+            rpy: [0.5, 0.1, -0.7],
+        };
+        let chain = d.chain();
+        let bound = chain.reach_bound();
+        let origin = Point3::from(chain.base().translation.vector);
+        let mut a = vec![0.0; chain.dof()];
+        let mut frames = chain.frames();
+        for _ in 0..2000 {
+            chain.sample_config(&mut rng, &mut a);
+            // Corners of the box too: prismatic axes at their extremes.
+            if rng.random_range(0..2) == 0 {
+                for (q, f) in a.iter_mut().zip(chain.free_axes()) {
+                    *q = if rng.random_range(0..2) == 0 {
+                        f.range.min
+                    } else {
+                        f.range.max
+                    };
+                }
+            }
+            chain.fk(&a, &mut frames);
+            let r = (frames.end_effector() - origin).norm();
+            assert!(
+                r <= bound + 1e-12,
+                "trial {trial}: {r} beyond the bound {bound}"
+            );
+        }
+    }
+    // A planar arm stretched straight attains it.
+    let d = design(vec![
+        link(0.0, 0.0, 0.7, 0.0, &[(Axis::Rz, -PI, PI)]),
+        link(
+            0.0,
+            0.0,
+            0.4,
+            0.0,
+            &[(Axis::Rz, -PI, PI), (Axis::Tx, -0.1, 0.25)],
+        ),
+    ]);
+    let chain = d.chain();
+    assert!(
+        (chain.reach_bound() - 1.35).abs() < 1e-12,
+        "{}",
+        chain.reach_bound()
+    );
+    let r = (chain.end_effector(&[0.0, 0.0, 0.25]) - Point3::origin()).norm();
+    assert!((r - 1.35).abs() < 1e-12, "{r}");
+}

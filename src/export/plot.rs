@@ -1,6 +1,6 @@
 //! Convergence plots (SVG, plotters): best reachability and best cost against time.
 
-use crate::optimize::runner::HistoryRow;
+use crate::optimize::output::HistoryRow;
 use plotters::prelude::*;
 
 /// An SVG with two panels sharing the time axis: best `R` (top) and best cost (bottom).

@@ -441,6 +441,29 @@ impl Chain {
         &self.home
     }
 
+    /// An upper bound on the distance of the end effector from the base origin over every
+    /// configuration within the ranges: the sum of the fixed translations (DH `d`, `a` and
+    /// constant prismatic offsets) and of each free prismatic axis's largest travel. Rotations
+    /// keep lengths, so `‖p_ee(a) − p_0‖ ≤ reach_bound()` for every `a` (triangle inequality
+    /// along the chain); a task farther than this plus the goal tolerance cannot be reached.
+    pub fn reach_bound(&self) -> f64 {
+        let mut r = 0.0;
+        for link in &self.links {
+            r += link.transform.translation.vector.norm();
+            for op in &self.ops[link.ops.clone()] {
+                r += match *op {
+                    Op::TransConst { v, .. } => v.abs(),
+                    Op::TransFree { k, .. } => {
+                        let range = self.free[k].range;
+                        range.min.abs().max(range.max.abs())
+                    }
+                    Op::RotConst { .. } | Op::RotFree { .. } => 0.0,
+                };
+            }
+        }
+        r
+    }
+
     /// The base pose `F_0`.
     pub fn base(&self) -> &IsometryMatrix3<f64> {
         &self.base

@@ -17,6 +17,7 @@
 #[cfg(feature = "mpi")]
 pub mod mpi;
 
+pub use super::output::{IslandRow, IslandsInfo};
 use super::runner::{
     files, history_row, step_rng, Checkpoint, Conclusion, Counters, HistoryRow, Observer,
     RunOptions, RunSummary, Runner,
@@ -48,21 +49,6 @@ impl Default for Migration {
     }
 }
 
-/// One row of `islands.csv`: an island after a generation and its migration.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct IslandRow {
-    /// Generation (from 1).
-    pub generation: u64,
-    /// Island index (from 0).
-    pub island: usize,
-    /// Evaluations of this island so far.
-    pub evaluations: u64,
-    /// The island's best cost so far (a migrant counts once it has arrived).
-    pub best_cost: f64,
-    /// Reachability of that design.
-    pub best_reachability: f64,
-}
-
 /// What a checkpoint of an island job adds to [`Checkpoint`]: `state` is then the array of
 /// the islands' optimiser states.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -75,17 +61,6 @@ pub struct IslandsCheckpoint {
     pub evaluations: Vec<u64>,
     /// `islands.csv` so far.
     pub rows: Vec<IslandRow>,
-}
-
-/// Where an island job's results came from, as `best.json` records it.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct IslandsInfo {
-    /// Number of islands.
-    pub islands: usize,
-    /// Migration settings.
-    pub migration: Migration,
-    /// The island whose best design was the job's best before the final re-check.
-    pub best_island: usize,
 }
 
 /// Communication between the processes of an island job. Every call is collective: every

@@ -8,11 +8,13 @@ pub mod ga;
 pub mod islands;
 pub mod lock;
 pub mod objective;
+pub mod output;
 pub mod pso;
 pub mod runner;
 
 pub use objective::{Breakdown, Objective};
-pub use runner::{RunOptions, RunSummary};
+pub use output::{HistoryRow, RunSummary};
+pub use runner::RunOptions;
 
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;

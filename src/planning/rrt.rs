@@ -247,6 +247,9 @@ struct Search {
     /// The forward tree, rooted at home.
     tree: Tree,
     reached: Vec<Option<u32>>,
+    /// Tasks farther from the base than the chain can reach ([`Chain::reach_bound`] plus the
+    /// goal tolerance): never targeted, and not waited for.
+    beyond: Vec<bool>,
     /// Backward trees of unreached tasks.
     goals: Vec<GoalTree>,
     /// Emptied backward trees, kept for their buffers.
@@ -363,6 +366,11 @@ impl<'a> Rrt<'a> {
         let mut any = false;
         for (r, t) in reached.iter_mut().zip(self.tasks) {
             if r.is_none() && self.within_tolerance(&ee, t) {
+                debug_assert!(
+                    (t - self.chain.base().translation.vector).coords.norm()
+                        <= self.chain.reach_bound() + self.config.goal_tolerance + 1e-9,
+                    "a task beyond the reach bound was reached"
+                );
                 *r = Some(node);
                 any = true;
             }
@@ -435,7 +443,7 @@ impl<'a> Rrt<'a> {
         let chain = self.chain;
         s.unreached.clear();
         s.unreached
-            .extend((0..s.reached.len()).filter(|&j| s.reached[j].is_none()));
+            .extend((0..s.reached.len()).filter(|&j| s.reached[j].is_none() && !s.beyond[j]));
         let j = s.unreached[rng.random_range(0..s.unreached.len())];
         let target = self.tasks[j];
         let mut node = s.tree.nearest_end_effector(&target);
@@ -545,7 +553,19 @@ impl<'a> Rrt<'a> {
         s.work.q_goal = sample;
     }
 
-    /// Grows the forward tree from home until every task is reached, for up to
+    /// For each task, whether it lies farther from the base origin than
+    /// [`Chain::reach_bound`] plus the goal tolerance: no configuration reaches it.
+    fn beyond_reach(&self) -> Vec<bool> {
+        let origin = Point3::from(self.chain.base().translation.vector);
+        let limit = self.chain.reach_bound() + self.config.goal_tolerance;
+        self.tasks
+            .iter()
+            .map(|t| (t - origin).norm() > limit * (1.0 + 1e-12) + 1e-12)
+            .collect()
+    }
+
+    /// Grows the forward tree from home until every task is reached (every task within the
+    /// chain's reach bound: the others cannot be, see [`Chain::reach_bound`]), for up to
     /// `config.max_iterations` iterations, or up to `budget_growth` times as many (at most
     /// [`MAX_ITERATIONS`]) while an unreached task has a backward tree (a collision-free posture
     /// on the task is known, so more work is likely to pay), and within the time cap if set.
@@ -561,6 +581,7 @@ impl<'a> Rrt<'a> {
         let mut s = Search {
             tree: Tree::new(chain),
             reached: vec![None; self.tasks.len()],
+            beyond: self.beyond_reach(),
             goals: Vec::new(),
             spare: Vec::new(),
             tried: HashSet::new(),
@@ -595,7 +616,12 @@ impl<'a> Rrt<'a> {
             .max(base);
         let start = Instant::now();
         let mut iterations = 0;
-        while s.reached.iter().any(Option::is_none) {
+        while s
+            .reached
+            .iter()
+            .zip(&s.beyond)
+            .any(|(r, &b)| r.is_none() && !b)
+        {
             let budget = if s.goals.is_empty() { base } else { grown };
             if iterations >= budget {
                 break;
@@ -641,6 +667,47 @@ mod tests {
     use super::*;
     use crate::kinematics::{Axis, Dh, Link, Range};
     use nalgebra::IsometryMatrix3;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(300))]
+        /// The scan with early exit returns the index a full scan returns (the first of the
+        /// nearest points), at every dimension from 1 to 13 and with duplicate points.
+        #[test]
+        fn nearest_linear_matches_a_full_scan(
+            dim in 1usize..14,
+            n in 1usize..200,
+            seed in any::<u64>(),
+        ) {
+            use rand::SeedableRng;
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            let mut points: Vec<f64> = (0..n * dim).map(|_| rng.random_range(-3.0..3.0)).collect();
+            // Repeat some points, so that ties occur.
+            for k in (dim..points.len()).step_by(7 * dim) {
+                let (head, rest) = points.split_at_mut(k);
+                rest[..dim].copy_from_slice(&head[..dim]);
+            }
+            let q: Vec<f64> = if seed % 3 == 0 {
+                points[..dim].to_vec()
+            } else {
+                (0..dim).map(|_| rng.random_range(-3.0..3.0)).collect()
+            };
+            let mut best = (f64::INFINITY, 0);
+            for (i, c) in points.chunks_exact(dim).enumerate() {
+                let d: f64 = c.iter().zip(&q).map(|(a, b)| (a - b) * (a - b)).sum();
+                if d < best.0 {
+                    best = (d, i);
+                }
+            }
+            let found = nearest_linear(&points, &q);
+            let d = |i: usize| -> f64 {
+                points[i * dim..(i + 1) * dim].iter().zip(&q).map(|(a, b)| (a - b) * (a - b)).sum()
+            };
+            // The same point, or (rounding of the sums differs) one at the same distance.
+            prop_assert!(found == best.1 || (d(found) - best.0).abs() <= 1e-12 * (1.0 + best.0));
+            prop_assert!(found <= best.1 || (d(found) - best.0).abs() <= 1e-12 * (1.0 + best.0));
+        }
+    }
 
     /// A planar arm of two unit links turning about z.
     fn arm() -> Chain {

@@ -1,0 +1,90 @@
+//! `kinsynth edges`: the edge checkers against the dense-sampling oracle.
+
+use kinsynth::Scenario;
+use std::path::PathBuf;
+
+/// Compare the four edge checkers with the dense-sampling oracle on random edges.
+///
+/// Prints a table; writes no files.
+#[derive(clap::Args)]
+#[command(allow_negative_numbers = true)]
+pub struct Args {
+    /// The scenario file (TOML).
+    pub file: PathBuf,
+    /// Step bounds L_max to test (comma-separated). Default: π/40, π/8, π/4.
+    #[arg(long, value_delimiter = ',')]
+    pub lmax: Vec<f64>,
+    /// Edges per L_max.
+    #[arg(long, default_value_t = 2000)]
+    pub count: usize,
+    /// Seed of the random edges.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Oracle sub-steps per edge.
+    #[arg(long, default_value_t = kinsynth::collision::oracle::ORACLE_SUBSTEPS)]
+    pub substeps: usize,
+}
+
+/// Runs the command.
+pub fn run(args: Args) -> Result<(), kinsynth::Error> {
+    let Args {
+        file,
+        lmax,
+        count,
+        seed,
+        substeps,
+    } = args;
+    use kinsynth::collision::{make_checker, oracle, CheckerKind, CollisionScene};
+    use std::f64::consts::PI;
+    let s = Scenario::load(&file)?;
+    let chain = s.space.largest().chain();
+    let body = kinsynth::collision::RobotBody::new(&chain, Vec::new(), &s.planner.self_collision);
+    let scene = std::sync::Arc::new(CollisionScene::new(&s.workspace));
+    let lmax = if lmax.is_empty() {
+        vec![PI / 40.0, PI / 8.0, PI / 4.0]
+    } else {
+        lmax
+    };
+    say!(
+        "{}: largest design, {} edges per L_max, oracle {} sub-steps, body model {}, {} self pairs",
+        file.display(),
+        count,
+        substeps,
+        s.planner.body.name(),
+        body.self_pairs().len()
+    );
+    say!(
+        "{:>8} {:>10} {:>8} {:>12} {:>14} {:>9} {:>8}",
+        "L_max",
+        "checker",
+        "blocked",
+        "false-free",
+        "false-blocked",
+        "µs/edge",
+        "FK/edge"
+    );
+    for l in lmax {
+        let edges = oracle::sample_edges(&scene, &chain, &body, l, s.planner.lambda, count, seed);
+        let verdicts: Vec<_> = edges
+            .iter()
+            .map(|(a, b)| oracle::judge_edge(&scene, &chain, &body, a, b, substeps))
+            .collect();
+        for kind in CheckerKind::ALL {
+            let checker = make_checker(kind, scene.clone(), s.planner.body);
+            let r = oracle::agreement(checker.as_ref(), &chain, &body, &edges, &verdicts);
+            say!(
+                "{:>8.4} {:>10} {:>8} {:>5} ({:>4.1}%) {:>6} ({:>4.1}%) {:>9.2} {:>8.1}",
+                l,
+                r.checker,
+                r.blocked,
+                r.false_free,
+                100.0 * r.false_free_rate(),
+                r.false_blocked,
+                100.0 * r.false_blocked_rate(),
+                1e6 * r.seconds_per_edge,
+                r.fk_per_edge
+            );
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,252 @@
+//! `kinsynth reach`: reachability of a design or of a URDF robot.
+
+use super::{override_planner, whole};
+use kinsynth::Scenario;
+use std::path::PathBuf;
+
+/// Reachability of a design: the share of task points an RRT from home reaches.
+///
+/// A best.json is replayed: without --seed, the planner seed, random stream and settings
+/// of the evaluation that produced it give the same R and paths. Writes the report to
+/// --json FILE and task_{i}.csv and task_{i}.json per reached task into --trajectories
+/// DIR, when given; nothing otherwise.
+#[derive(clap::Args)]
+#[command(allow_negative_numbers = true)]
+pub struct Args {
+    /// The scenario file (TOML).
+    pub file: PathBuf,
+    /// A design JSON or an optimiser's best.json. Default: the scenario's largest design.
+    #[arg(long)]
+    pub design: Option<PathBuf>,
+    /// Edge checker: discrete, segment, ccd or certified. Default: the scenario's.
+    #[arg(long)]
+    pub checker: Option<kinsynth::collision::CheckerKind>,
+    /// Step bound L_max. Default: the scenario's.
+    #[arg(long)]
+    pub lmax: Option<f64>,
+    /// Seed of the planner. Default: the scenario's (for a best.json: its own, replayed).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Plan with N planner seeds (--seed and the N − 1 after it) and report the spread of
+    /// R: min, mean and max. The report and trajectories are those of the first seed.
+    #[arg(long)]
+    pub seeds: Option<f64>,
+    /// Write the report as JSON to this file (atomically).
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    #[command(flatten)]
+    pub urdf: UrdfReach,
+}
+
+/// Runs the command.
+pub fn run(args: Args) -> Result<(), kinsynth::Error> {
+    let Args {
+        file,
+        design,
+        checker,
+        lmax,
+        seed,
+        seeds,
+        json,
+        urdf,
+    } = args;
+    use rayon::prelude::*;
+    let s = Scenario::load(&file)?;
+    let max_seeds = kinsynth::optimize::runner::MAX_SEEDS as u64;
+    let seeds = whole("--seeds", seeds, 1, max_seeds)?;
+    // A best.json without --seed or --seeds replays the evaluation that produced it.
+    let replay = match (&design, seed, seeds) {
+        (Some(p), None, None) => kinsynth::optimize::runner::Replay::from_best(p)?,
+        _ => None,
+    };
+    let (chain, urdf_names, body) = match &urdf.urdf {
+        Some(p) => {
+            let options = kinsynth::import::ImportOptions {
+                body: urdf.body,
+                packages: urdf.package.clone(),
+                srdf: urdf.srdf.clone(),
+                self_collision: s.planner.self_collision.clone(),
+            };
+            let r = kinsynth::import::load_robot(
+                p,
+                urdf.base_frame.as_deref(),
+                urdf.tip_frame.as_deref(),
+                urdf.radius,
+                s.space.template().colliders_per_link,
+                &options,
+            )?;
+            if let Some(note) = &r.note {
+                eprintln!("note: {}: {note}", p.display());
+            }
+            let body = std::sync::Arc::new(r.body);
+            (r.urdf.chain, Some(r.urdf.joint_names), Some(body))
+        }
+        None => match &design {
+            Some(p) => (kinsynth::Design::load(p)?.chain(), None, None),
+            None => (s.space.largest().chain(), None, None),
+        },
+    };
+    let mut planner = replay
+        .as_ref()
+        .map_or_else(|| s.planner.clone(), |r| r.planner.clone());
+    override_planner(&mut planner, checker, lmax)?;
+    let (first_seed, stream) = match &replay {
+        Some(r) => {
+            say!(
+                "replaying the evaluation that produced {}: planner seed {}, stream {}",
+                design
+                    .as_ref()
+                    .map_or(String::new(), |p| p.display().to_string()),
+                r.seed,
+                r.stream
+            );
+            (r.seed, r.stream)
+        }
+        None => (seed.unwrap_or(s.seed), 0),
+    };
+    let n = seeds.unwrap_or(1);
+    let scene = std::sync::Arc::new(kinsynth::collision::CollisionScene::new(&s.workspace));
+    let start = std::time::Instant::now();
+    let mut reports: Vec<kinsynth::planning::ReachReport> = (0..n)
+        .into_par_iter()
+        .map(|k| {
+            let seed = first_seed.wrapping_add(k);
+            match &body {
+                Some(body) => kinsynth::planning::reach::reachability_of(
+                    &chain,
+                    body.clone(),
+                    &scene,
+                    &s.workspace.tasks,
+                    &planner,
+                    seed,
+                    stream,
+                ),
+                None => kinsynth::planning::reachability(
+                    &chain,
+                    &scene,
+                    &s.workspace.tasks,
+                    &planner,
+                    seed,
+                    stream,
+                ),
+            }
+        })
+        .collect();
+    let elapsed = start.elapsed();
+    let spread = (n > 1).then(|| {
+        let r: Vec<f64> = reports.iter().map(|r| r.reachability).collect();
+        let min = r.iter().copied().fold(f64::INFINITY, f64::min);
+        let max = r.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let mean = r.iter().sum::<f64>() / r.len() as f64;
+        for (k, rep) in reports.iter().enumerate() {
+            say!(
+                "seed {}: R = {:.3} ({} of {} tasks)",
+                first_seed.wrapping_add(k as u64),
+                rep.reachability,
+                rep.reached(),
+                rep.targets.len()
+            );
+        }
+        say!(
+            "R over {n} seeds ({}–{}): min {min:.3}, mean {mean:.3}, max {max:.3}",
+            first_seed,
+            first_seed.wrapping_add(n - 1)
+        );
+        serde_json::json!({
+            "seeds": (0..n).map(|k| first_seed.wrapping_add(k)).collect::<Vec<_>>(),
+            "reachability": r,
+            "min": min,
+            "mean": mean,
+            "max": max,
+        })
+    });
+    let mut report = reports.swap_remove(0);
+    if let Some(names) = &urdf_names {
+        kinsynth::import::urdf::rename_joints(&mut report, names);
+    }
+    say!(
+        "R = {:.3} ({} of {} tasks) with {} at L_max {:.4}, seed {first_seed}{}: {} iterations, {} nodes, {} edge checks, {:.1} ms",
+        report.reachability,
+        report.reached(),
+        report.targets.len(),
+        report.checker,
+        report.l_max,
+        if stream == 0 { String::new() } else { format!(" stream {stream}") },
+        report.iterations,
+        report.nodes,
+        report.edge_checks,
+        elapsed.as_secs_f64() * 1e3
+    );
+    if let Some(why) = &report.home_blocked {
+        say!("  {why}");
+    }
+    for t in &report.targets {
+        say!(
+            "  task {:>3} {:<11} error {:.4} m  path {}",
+            t.index,
+            if t.reached { "reached" } else { "not reached" },
+            t.error,
+            t.path
+                .as_ref()
+                .map_or("-".to_string(), |p| format!("{} nodes", p.points.len()))
+        );
+    }
+    if let Some(path) = json {
+        let mut v = serde_json::to_value(&report).expect("a report serialises");
+        v["stream"] = stream.into();
+        if let Some(spread) = spread {
+            v["spread"] = spread;
+        }
+        let text = serde_json::to_string_pretty(&v).expect("a report serialises");
+        kinsynth::io::write_atomic(&path, text.as_bytes())?;
+    }
+    if let Some(dir) = &urdf.trajectories {
+        let files = kinsynth::export::trajectory::write_trajectories(&report, dir)?;
+        say!(
+            "wrote {} trajectory files to {}",
+            files.len(),
+            dir.display()
+        );
+    }
+    Ok(())
+}
+
+/// `reach` options for evaluating an existing URDF robot and writing trajectories.
+#[derive(clap::Args)]
+pub struct UrdfReach {
+    /// Evaluate this URDF robot instead of a design (see the README's "URDF" section).
+    #[arg(long, conflicts_with = "design")]
+    pub urdf: Option<PathBuf>,
+    /// URDF link where the chain starts. Default: the root link.
+    #[arg(long, requires = "urdf")]
+    pub base_frame: Option<String>,
+    /// URDF link whose origin is the end effector. Default: the leaf below the base.
+    #[arg(long, requires = "urdf")]
+    pub tip_frame: Option<String>,
+    /// Capsule radius of the URDF robot's links (m). Default: the largest radius of its
+    /// collision cylinders and spheres, else 0.05.
+    #[arg(long, requires = "urdf")]
+    pub radius: Option<f64>,
+    /// Bodies of the URDF robot's links: `collision` (their <collision> meshes, boxes,
+    /// cylinders, spheres and capsules) or `capsules` (capsules between joint origins).
+    #[arg(long, requires = "urdf", default_value_t = kinsynth::import::BodyChoice::Collision)]
+    pub body: kinsynth::import::BodyChoice,
+    /// Where `package://NAME/…` mesh URIs point: NAME=DIR (repeatable). Default: a folder
+    /// NAME above the URDF.
+    #[arg(long, requires = "urdf", value_parser = package_arg)]
+    pub package: Vec<(String, PathBuf)>,
+    /// An SRDF whose <disable_collisions> link pairs are never checked for self-collision.
+    #[arg(long, requires = "urdf")]
+    pub srdf: Option<PathBuf>,
+    /// Write task_{index}.csv and task_{index}.json for every reached task into this directory.
+    #[arg(long)]
+    pub trajectories: Option<PathBuf>,
+}
+
+/// Parses `--package NAME=DIR`.
+fn package_arg(s: &str) -> Result<(String, PathBuf), String> {
+    match s.split_once('=') {
+        Some((n, d)) if !n.is_empty() && !d.is_empty() => Ok((n.to_string(), PathBuf::from(d))),
+        _ => Err(format!("`{s}`: expected NAME=DIR")),
+    }
+}

@@ -1,0 +1,47 @@
+//! `kinsynth urdf`: exports a design as URDF and SRDF.
+
+use kinsynth::Scenario;
+use std::path::PathBuf;
+
+/// Export a design (design JSON or best.json) as a URDF robot and its SRDF.
+///
+/// Writes the file given by -o and, beside it, the same name with the extension .srdf
+/// (planning group and allowed-collision matrix).
+#[derive(clap::Args)]
+pub struct Args {
+    /// The design JSON, or an optimiser's best.json.
+    pub design: PathBuf,
+    /// Output URDF file (written atomically); the robot is named after its stem.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Scenario whose [robot] self-collision settings (self_collision, allowed_collisions,
+    /// self_collision_samples, seed) fill the SRDF. Default: self-collision on, 1000
+    /// samples, seed 0.
+    #[arg(long)]
+    pub scenario: Option<PathBuf>,
+}
+
+/// Runs the command.
+pub fn run(args: Args) -> Result<(), kinsynth::Error> {
+    let Args {
+        design,
+        output,
+        scenario,
+    } = args;
+    let d = kinsynth::Design::load(&design)?;
+    let config = match &scenario {
+        Some(p) => Scenario::load(p)?.planner.self_collision,
+        None => kinsynth::collision::SelfCollisionConfig::default(),
+    };
+    let srdf = output.with_extension("srdf");
+    kinsynth::export::write_urdf(&d, &output)?;
+    kinsynth::export::write_srdf(&d, &config, &srdf)?;
+    say!(
+        "wrote {} ({} links, {} joints) and {}",
+        output.display(),
+        d.links.len(),
+        d.joints_kept(),
+        srdf.display()
+    );
+    Ok(())
+}
