@@ -82,13 +82,13 @@ fn two_shards_merge_into_the_unsharded_tables() {
     // The times differ between two runs of the same experiment; merging the whole experiment's
     // own folder reproduces its tables byte for byte.
     let again = dir.path().join("again");
-    merge(&[whole.clone()], &again).unwrap();
+    merge(std::slice::from_ref(&whole), &again).unwrap();
     for f in ["runs.csv", "curves.csv", "curves.svg"] {
         assert_eq!(read(&again.join(f)), read(&whole.join(f)), "{f}");
     }
 
     // A missing slice, a slice given twice and a slice of another experiment are refused.
-    let e = merge(&[a.clone()], &dir.path().join("m1"))
+    let e = merge(std::slice::from_ref(&a), &dir.path().join("m1"))
         .unwrap_err()
         .to_string();
     assert!(e.contains("workspace 1 of 3 is in none of them"), "{e}");
