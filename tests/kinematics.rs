@@ -223,30 +223,41 @@ fn compare_at_random_configurations(d: &Design, seed: u64) {
     }
 }
 
+/// A link with random DH parameters whose axes are each absent, free over `range(rng)`, or a
+/// random constant (folded into the geometry).
+fn random_link(
+    rng: &mut ChaCha8Rng,
+    range: &mut dyn FnMut(&mut ChaCha8Rng) -> (f64, f64),
+) -> LinkDesign {
+    let mut axes = Vec::new();
+    for axis in Axis::ALL {
+        match rng.random_range(0..3) {
+            0 => {}
+            1 => {
+                let (lo, hi) = range(rng);
+                axes.push((axis, lo, hi));
+            }
+            _ => {
+                let v = rng.random_range(-0.5..0.5);
+                axes.push((axis, v, v));
+            }
+        }
+    }
+    link(
+        rng.random_range(-PI..PI),
+        rng.random_range(-0.5..0.5),
+        rng.random_range(0.0..0.6),
+        rng.random_range(-PI..PI),
+        &axes,
+    )
+}
+
 #[test]
 fn fk_matches_independent_matrix_product_on_a_general_chain() {
     let mut rng = ChaCha8Rng::seed_from_u64(11);
-    let mut links = Vec::new();
-    for _ in 0..6 {
-        let mut axes = Vec::new();
-        for axis in Axis::ALL {
-            match rng.random_range(0..3) {
-                0 => {}
-                1 => axes.push((axis, -1.2, 0.9)),
-                _ => {
-                    let v = rng.random_range(-0.5..0.5);
-                    axes.push((axis, v, v)); // constant, folded into the geometry
-                }
-            }
-        }
-        links.push(link(
-            rng.random_range(-PI..PI),
-            rng.random_range(-0.5..0.5),
-            rng.random_range(0.0..0.6),
-            rng.random_range(-PI..PI),
-            &axes,
-        ));
-    }
+    let links = (0..6)
+        .map(|_| random_link(&mut rng, &mut |_| (-1.2, 0.9)))
+        .collect();
     let mut d = design(links);
     d.base = Placement {
         position: [0.1, -0.2, 0.3],
@@ -283,31 +294,14 @@ fn fk_matches_independent_matrix_product_on_the_paper_chains() {
 fn the_reach_bound_covers_every_configuration_and_is_tight_for_a_stretched_arm() {
     let mut rng = ChaCha8Rng::seed_from_u64(23);
     for trial in 0..20 {
-        let mut links = Vec::new();
-        for _ in 0..rng.random_range(1..7) {
-            let mut axes = Vec::new();
-            for axis in Axis::ALL {
-                match rng.random_range(0..3) {
-                    0 => {}
-                    1 => axes.push((
-                        axis,
-                        rng.random_range(-1.5..0.0),
-                        rng.random_range(0.0..1.0),
-                    )),
-                    _ => {
-                        let v = rng.random_range(-0.5..0.5);
-                        axes.push((axis, v, v));
-                    }
-                }
-            }
-            links.push(link(
-                rng.random_range(-PI..PI),
-                rng.random_range(-0.5..0.5),
-                rng.random_range(0.0..0.6),
-                rng.random_range(-PI..PI),
-                &axes,
-            ));
-        }
+        let n = rng.random_range(1..7);
+        let links = (0..n)
+            .map(|_| {
+                random_link(&mut rng, &mut |r| {
+                    (r.random_range(-1.5..0.0), r.random_range(0.0..1.0))
+                })
+            })
+            .collect();
         let mut d = design(links);
         d.base = Placement {
             position: [0.3, -0.2, 0.1],

@@ -105,6 +105,9 @@ fn writes_every_output_with_the_documented_shape() {
     assert_eq!(b["optimizer"], "asa");
     assert_eq!(b["checker"], "discrete");
     assert!((b["l_max"].as_f64().unwrap() - std::f64::consts::PI / 40.0).abs() < 1e-12);
+    // ... planned with the paper's RRT: no backward trees, a fixed budget.
+    assert_eq!(b["planner"]["postures"], 0, "{}", b["planner"]);
+    assert_eq!(b["planner"]["budget_growth"], 1, "{}", b["planner"]);
 }
 
 #[test]

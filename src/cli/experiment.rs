@@ -3,9 +3,10 @@
 use kinsynth::scenario::preset::Preset;
 use std::path::PathBuf;
 
-/// Reproduce the paper's experiments: §IV-A (paper-2d: GA, PSO, ASA with segment at π/4
-/// against the ASA + discrete π/40 baseline) or §IV-B (paper-3d: GA), averaged over random
-/// workspaces.
+/// Reproduce the paper's experiments: §IV-A (paper-2d: GA, PSO and ASA with certified at π/4,
+/// GA with segment at π/4, against the paper's baseline, ASA + discrete π/40 with the paper's
+/// planner, also run with this planner) or §IV-B (paper-3d: GA with certified at π/4), averaged
+/// over random workspaces.
 ///
 /// Writes into --out: runs.csv (one row per run), curves.csv and curves.svg (average
 /// reachability against time), experiment.json (the settings and the workspaces held, for

@@ -35,7 +35,8 @@ pub struct Args {
     /// Step bound L_max. Default: the scenario's.
     #[arg(long, conflicts_with = "resume")]
     pub lmax: Option<f64>,
-    /// The paper's baseline: ASA with node-only (discrete) checks at L_max = π/40.
+    /// The paper's baseline: ASA with node-only (discrete) checks at L_max = π/40, planned as
+    /// the paper's RRT does (no backward trees, a fixed budget).
     #[arg(long, conflicts_with_all = ["optimizer", "checker", "lmax", "resume"])]
     pub baseline: bool,
     /// Seed. Default: the scenario's.
@@ -212,6 +213,9 @@ pub fn prepare(args: &Args) -> Result<Prepared, kinsynth::Error> {
                 planner.checker = kinsynth::collision::CheckerKind::Discrete;
                 planner.l_max = std::f64::consts::PI / 40.0;
                 planner.schedule = None;
+                // The paper's RRT: from home alone, within the fixed budget.
+                planner.postures = 0;
+                planner.budget_growth = 1;
             }
             if let Some(a) = optimizer {
                 algorithm = a;

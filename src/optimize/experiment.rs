@@ -23,11 +23,15 @@ pub struct Method {
     pub checker: CheckerKind,
     /// Step bound `L_max`.
     pub l_max: f64,
+    /// Plan as the paper's RRT does: from home alone, within the fixed iteration budget
+    /// (`postures = 0`, `budget_growth = 1`); otherwise with the scenario's planner settings.
+    pub paper_planner: bool,
 }
 
 /// The methods of an experiment: §IV-A compares GA, PSO and ASA with `certified` (the
 /// default, proven-safe checker) at π/4, GA with the paper's `segment` fast path at π/4, and the
-/// ASA + `discrete` π/40 baseline; §IV-B runs GA with `certified` at π/4.
+/// paper's baseline, ASA + `discrete` at π/40 with the paper's planner (no backward trees, a
+/// fixed budget), also run with the scenario's planner; §IV-B runs GA with `certified` at π/4.
 pub fn methods(preset: Preset) -> Vec<Method> {
     use std::f64::consts::PI;
     let m = |label: &str, algorithm, checker, l_max| Method {
@@ -35,6 +39,7 @@ pub fn methods(preset: Preset) -> Vec<Method> {
         algorithm,
         checker,
         l_max,
+        paper_planner: false,
     };
     let certified = CheckerKind::Certified;
     match preset {
@@ -48,8 +53,17 @@ pub fn methods(preset: Preset) -> Vec<Method> {
                 CheckerKind::Segment,
                 PI / 4.0,
             ),
+            Method {
+                paper_planner: true,
+                ..m(
+                    "ASA discrete pi/40 (baseline)",
+                    Algorithm::Asa,
+                    CheckerKind::Discrete,
+                    PI / 40.0,
+                )
+            },
             m(
-                "ASA discrete pi/40 (baseline)",
+                "ASA discrete pi/40 with this planner",
                 Algorithm::Asa,
                 CheckerKind::Discrete,
                 PI / 40.0,
@@ -225,6 +239,10 @@ pub fn run_experiment(
             planner.checker = m.checker;
             planner.l_max = m.l_max;
             planner.schedule = None;
+            if m.paper_planner {
+                planner.postures = 0;
+                planner.budget_growth = 1;
+            }
             let options = RunOptions {
                 algorithm: m.algorithm,
                 seed: ws_seed,
