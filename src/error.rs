@@ -79,6 +79,15 @@ pub enum Error {
         /// What is wrong with it.
         reason: String,
     },
+    /// An island job over MPI could not go on: a rank refused the job, or the messages between
+    /// ranks were not what the protocol expects.
+    #[error("island job, rank {rank}: {}", one_line(message))]
+    Island {
+        /// The rank that reports it.
+        rank: usize,
+        /// What happened.
+        message: String,
+    },
     /// An error found while processing a particular file.
     #[error("{}: {source}", file.display())]
     InFile {

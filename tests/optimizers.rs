@@ -19,6 +19,7 @@ fn drive(opt: &mut dyn Optimizer, problem: &dyn Problem, budget: u64, seed: u64)
             problem,
             rng: &mut rng,
             first_stream: evaluations,
+            stride: 1,
             progress: evaluations as f64 / budget as f64,
         });
         evaluations += r.evaluations;

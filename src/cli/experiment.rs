@@ -9,8 +9,10 @@ use std::path::PathBuf;
 /// over random workspaces.
 ///
 /// Writes into --out: runs.csv (one row per run), curves.csv and curves.svg (average
-/// reachability against time), and per workspace w: workspace{w}/scenario.toml and, per
-/// method k, workspace{w}/method{k}/ with every file `optimize` writes.
+/// reachability against time), experiment.json (the settings and the workspaces held, for
+/// `kinsynth merge`), and per workspace w: workspace{w}/scenario.toml and, per method k,
+/// workspace{w}/method{k}/ with every file `optimize` writes. With --shard K/N only the K-th
+/// of N slices of the workspaces (e.g. one task of a Slurm job array).
 #[derive(clap::Args)]
 #[command(allow_negative_numbers = true)]
 pub struct Args {
@@ -25,6 +27,14 @@ pub struct Args {
     /// Seed of the first workspace (the others follow).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Evaluations per run at most (with a time limit that is not reached, every result but
+    /// the times then depends on the seeds only).
+    #[arg(long)]
+    pub evaluations: Option<f64>,
+    /// Run only the K-th (from 1) of N slices of the workspaces; `kinsynth merge` combines
+    /// the slices' folders.
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<String>,
     /// Output directory.
     #[arg(long)]
     pub out: PathBuf,
@@ -37,25 +47,43 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         runs,
         time_limit,
         seed,
+        evaluations,
+        shard,
         out,
     } = args;
-    use kinsynth::optimize::experiment::{median, methods, run_experiment};
-    if !(time_limit.is_finite() && time_limit > 0.0) {
-        return Err(kinsynth::Error::invalid(
-            "--time-limit",
-            time_limit,
-            "must be positive and finite",
-        ));
-    }
-    let records = run_experiment(p, runs, time_limit, seed, &out, &mut |line| {
-        eprintln!("{line}")
-    })?;
+    use kinsynth::optimize::experiment::{run_experiment, ExperimentSpec, Shard};
+    let shard = match shard {
+        Some(s) => s.parse::<Shard>()?,
+        None => Shard::WHOLE,
+    };
+    let spec = ExperimentSpec {
+        preset: p,
+        runs,
+        time_limit,
+        evaluations: super::whole("--evaluations", evaluations, 1, u64::MAX >> 12)?,
+        seed,
+    };
+    spec.validate()?;
+    let records = run_experiment(&spec, shard, &out, &mut |line| eprintln!("{line}"))?;
     say!(
-        "{} runs of {} s written to {}",
+        "{} runs of {} s (workspaces {:?} of {}, shard {shard}) written to {}",
         records.len(),
         time_limit,
+        shard.workspaces(runs),
+        runs,
         out.display()
     );
+    print_table(p, &records, time_limit);
+    Ok(())
+}
+
+/// Prints a line per method: how often and how fast it reached R = 1, and its median design.
+pub fn print_table(
+    p: Preset,
+    records: &[kinsynth::optimize::experiment::RunRecord],
+    time_limit: f64,
+) {
+    use kinsynth::optimize::experiment::{median, methods};
     for (k, m) in methods(p).iter().enumerate() {
         let mine: Vec<_> = records.iter().filter(|r| r.method == k).collect();
         let times: Vec<f64> = mine.iter().filter_map(|r| r.time_to_full_reach()).collect();
@@ -81,5 +109,4 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
             med(|s| s.joints_kept as f64),
         );
     }
-    Ok(())
 }

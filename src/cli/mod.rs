@@ -16,6 +16,8 @@ macro_rules! say {
 pub mod check;
 pub mod edges;
 pub mod experiment;
+mod islands;
+pub mod merge;
 pub mod optimize;
 mod progress;
 pub mod reach;

@@ -20,7 +20,8 @@ const MAX_EVALUATIONS: u64 = 1_000_000_000_000;
 /// best design as URDF), robot.srdf (its planning group and allowed-collision matrix),
 /// trajectories/ (task_{i}.csv and task_{i}.json per reached task)
 /// and checkpoint.json (the state for --resume); .kinsynth.lock exists while the run lasts.
-#[derive(clap::Args)]
+/// With --islands also islands.csv (one row per island per generation).
+#[derive(clap::Args, Clone)]
 #[command(allow_negative_numbers = true)]
 pub struct Args {
     /// The scenario file (TOML). With --resume: default the checkpoint's, and if given it
@@ -70,10 +71,64 @@ pub struct Args {
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
+    /// An island job: one island (population) per MPI rank under `mpirun`/`srun` (built with
+    /// `--features mpi`), or N islands in this process. Every `[optimizer] migration.interval`
+    /// generations each island sends its best `migration.count` designs to the next; also
+    /// writes islands.csv (one row per island per generation). With --resume: the job must
+    /// have as many islands as the checkpoint.
+    #[arg(long, value_name = "N", num_args = 0..=1)]
+    pub islands: Option<Option<usize>>,
+}
+
+/// What `optimize` has read and checked before a run starts, with the output lock held.
+pub struct Prepared {
+    /// The scenario.
+    pub scenario: Scenario,
+    /// Its file.
+    pub scenario_path: PathBuf,
+    /// Planner settings.
+    pub planner: kinsynth::planning::PlannerConfig,
+    /// Run settings.
+    pub options: kinsynth::optimize::RunOptions,
+    /// The checkpoint to resume (read under the lock).
+    pub checkpoint: Option<kinsynth::optimize::runner::Checkpoint>,
+    /// Output directory.
+    pub out: PathBuf,
+    /// The output-directory lock.
+    pub lock: kinsynth::optimize::lock::OutputLock,
 }
 
 /// Runs the command.
 pub fn run(args: Args) -> Result<(), kinsynth::Error> {
+    if let Some(islands) = args.islands {
+        return super::islands::run(args, islands);
+    }
+    let Prepared {
+        scenario: s,
+        scenario_path,
+        planner,
+        options,
+        checkpoint,
+        out,
+        lock,
+    } = prepare(&args)?;
+    let stop = stop_on_ctrl_c();
+    let runner = kinsynth::optimize::runner::Runner::new(
+        &s,
+        &scenario_path,
+        planner.clone(),
+        options.clone(),
+        &out,
+    );
+    let mut observer = progress::Bar::new(&options, args.quiet);
+    let summary = runner.run(checkpoint, &stop, &mut observer)?;
+    report(&out, &summary);
+    drop(lock);
+    Ok(())
+}
+
+/// Reads and checks the options, the scenario and any checkpoint, and takes the output lock.
+pub fn prepare(args: &Args) -> Result<Prepared, kinsynth::Error> {
     let Args {
         file,
         optimizer,
@@ -88,8 +143,9 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         confirm_seeds,
         out,
         resume,
-        quiet,
-    } = args;
+        quiet: _,
+        islands: _,
+    } = args.clone();
     use kinsynth::optimize::lock::OutputLock;
     use kinsynth::optimize::runner::{check_seconds, Checkpoint, RunOptions, Runner};
     if let Some(t) = time_limit {
@@ -211,11 +267,24 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         None => None,
     };
     let (planner, options) = settings(&checkpoint)?;
+    Ok(Prepared {
+        scenario: s,
+        scenario_path,
+        planner,
+        options,
+        checkpoint,
+        out,
+        lock,
+    })
+}
+
+/// Raises the returned flag on Ctrl-C (the run stops after its generation and writes its
+/// results); a second Ctrl-C ends the process at once, removing the lock file (the operating
+/// system releases the lock itself).
+pub fn stop_on_ctrl_c() -> std::sync::Arc<std::sync::atomic::AtomicBool> {
     let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     {
         let stop = stop.clone();
-        // A second Ctrl-C while results are written ends the process at once (and
-        // removes the lock file; the operating system releases the lock itself).
         let _ = ctrlc::set_handler(move || {
             if stop.swap(true, std::sync::atomic::Ordering::SeqCst) {
                 if let Some(p) = LOCK_PATH.get() {
@@ -225,9 +294,11 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
             }
         });
     }
-    let runner = Runner::new(&s, &scenario_path, planner.clone(), options.clone(), &out);
-    let mut observer = progress::Bar::new(&options, quiet);
-    let summary = runner.run(checkpoint, &stop, &mut observer)?;
+    stop
+}
+
+/// Prints the one-line summary of a finished run.
+pub fn report(out: &std::path::Path, summary: &kinsynth::optimize::RunSummary) {
     let robust = summary.robust_reachability.as_ref().map_or_else(
         || "no re-check".to_string(),
         |r| {
@@ -253,6 +324,4 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         summary.elapsed_s,
         summary.stopped
     );
-    drop(lock);
-    Ok(())
 }

@@ -17,8 +17,8 @@
 //! acceptance temperature restarts from the best cost's scale.
 
 use super::{
-    check_len, check_points, evaluate_batch, keep_best, random_point, Evaluated, Optimizer,
-    StepContext, StepReport,
+    best_distinct, check_len, check_points, evaluate_batch, keep_best, random_point, Evaluated,
+    Optimizer, StepContext, StepReport,
 };
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
@@ -144,7 +144,7 @@ impl Optimizer for Asa {
                 xs.push(random_point(lower, upper, rng));
             }
             let n = xs.len() as u64;
-            let ev = evaluate_batch(ctx.problem, xs, ctx.first_stream, ctx.progress);
+            let ev = evaluate_batch(ctx.problem, xs, ctx.first_stream, ctx.stride, ctx.progress);
             let mean = ev.iter().map(|e| e.cost).sum::<f64>() / ev.len() as f64;
             let var = ev.iter().map(|e| (e.cost - mean).powi(2)).sum::<f64>() / ev.len() as f64;
             self.t0_accept = var.sqrt().max(1e-9);
@@ -160,7 +160,7 @@ impl Optimizer for Asa {
             .map(|_| self.generate(&current.x, lower, upper, rng))
             .collect();
         let mut evaluations = xs.len() as u64;
-        let ev = evaluate_batch(ctx.problem, xs, ctx.first_stream, ctx.progress);
+        let ev = evaluate_batch(ctx.problem, xs, ctx.first_stream, ctx.stride, ctx.progress);
         let mut cur = current;
         for e in ev {
             keep_best(&mut self.best, &e);
@@ -198,9 +198,11 @@ impl Optimizer for Asa {
                     x
                 })
                 .collect();
-            let stream = ctx.first_stream + evaluations;
+            let stream = ctx
+                .first_stream
+                .wrapping_add(evaluations.wrapping_mul(ctx.stride));
             evaluations += probes.len() as u64;
-            let ev = evaluate_batch(ctx.problem, probes, stream, ctx.progress);
+            let ev = evaluate_batch(ctx.problem, probes, stream, ctx.stride, ctx.progress);
             let s: Vec<f64> = ev
                 .iter()
                 .enumerate()
@@ -245,6 +247,20 @@ impl Optimizer for Asa {
 
     fn candidates(&self) -> Vec<&Evaluated> {
         self.current.iter().chain(self.best.as_ref()).collect()
+    }
+
+    fn emigrants(&self, count: usize) -> Vec<Evaluated> {
+        best_distinct(self.current.iter().chain(self.best.as_ref()), count)
+    }
+
+    fn immigrate(&mut self, migrants: &[Evaluated]) {
+        let Some(first) = best_distinct(migrants, 1).into_iter().next() else {
+            return;
+        };
+        if self.current.as_ref().is_some_and(|c| first.better_than(c)) {
+            self.current = Some(first.clone());
+        }
+        keep_best(&mut self.best, &first);
     }
 
     fn validate(&self, dim: usize) -> Result<(), String> {

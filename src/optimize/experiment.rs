@@ -8,6 +8,7 @@ use crate::io::write_atomic;
 use crate::scenario::preset::{self, Preset};
 use crate::scenario::{Algorithm, Scenario};
 use plotters::prelude::*;
+use serde::{Deserialize, Serialize};
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
@@ -117,31 +118,121 @@ pub fn median(mut v: Vec<f64>) -> Option<f64> {
     })
 }
 
-/// Runs the experiment: `runs` workspaces of `preset` (seeds `seed`, `seed + 1`, …), each
-/// optimised by every method of [`methods`] for `time_limit` seconds (stopping early when
-/// converged), writing into `out`: each workspace's scenario and run folders, `runs.csv` (one
-/// line per run), `curves.csv` (averaged curves on a time grid) and `curves.svg`.
+/// One slice of an experiment's workspaces: the `index`-th (from 1) of `count` (`--shard K/N`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Shard {
+    /// Which slice, from 1.
+    pub index: usize,
+    /// Number of slices.
+    pub count: usize,
+}
+
+impl Shard {
+    /// The whole experiment: slice 1 of 1.
+    pub const WHOLE: Shard = Shard { index: 1, count: 1 };
+
+    /// The workspaces of this slice out of `runs`: a contiguous range, the slices of one
+    /// experiment covering `0 … runs−1` exactly once (some may be empty when `count > runs`).
+    pub fn workspaces(&self, runs: usize) -> std::ops::Range<usize> {
+        let (k, n) = (self.index - 1, self.count);
+        (k * runs / n)..((k + 1) * runs / n)
+    }
+}
+
+impl std::str::FromStr for Shard {
+    type Err = crate::Error;
+    /// Parses `K/N` with `1 ≤ K ≤ N` (Slurm: `--shard $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT`
+    /// with `--array=1-N`).
+    fn from_str(s: &str) -> Result<Self> {
+        let bad = |why: &str| crate::Error::invalid("--shard", s, why);
+        let (k, n) = s
+            .split_once('/')
+            .ok_or_else(|| bad("must be K/N, e.g. 2/4"))?;
+        let parse = |t: &str| t.trim().parse::<usize>().ok();
+        let (Some(index), Some(count)) = (parse(k), parse(n)) else {
+            return Err(bad("must be K/N with whole numbers K and N, e.g. 2/4"));
+        };
+        if count == 0 || count > MAX_SHARDS {
+            return Err(bad(&format!("N must lie in 1..={MAX_SHARDS}")));
+        }
+        if !(1..=count).contains(&index) {
+            return Err(bad("K must lie in 1..=N"));
+        }
+        Ok(Shard { index, count })
+    }
+}
+
+impl std::fmt::Display for Shard {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}/{}", self.index, self.count)
+    }
+}
+
+/// The largest number of slices of an experiment (and of workspaces).
+pub const MAX_SHARDS: usize = 100_000;
+
+/// How an experiment is set up.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ExperimentSpec {
+    /// The paper's experiment: paper-2d (§IV-A) or paper-3d (§IV-B).
+    pub preset: Preset,
+    /// Number of random workspaces of the whole experiment.
+    pub runs: usize,
+    /// Seconds per run (also the time axis of the curves).
+    pub time_limit: f64,
+    /// Evaluations per run, if capped: with it (and a time limit that is not reached) every
+    /// result but the times depends on the seeds only.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub evaluations: Option<u64>,
+    /// Seed of the first workspace (the others follow).
+    pub seed: u64,
+}
+
+/// `experiment.json`: what an experiment's folder holds, for `kinsynth merge`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Manifest {
+    /// The experiment.
+    pub spec: ExperimentSpec,
+    /// The slice this folder holds.
+    pub shard: Shard,
+    /// Its workspaces.
+    pub workspaces: Vec<usize>,
+}
+
+/// Name of the manifest file in an experiment's folder.
+pub const MANIFEST: &str = "experiment.json";
+
+/// Runs the experiment, or the slice `shard` of it: the workspaces of [`Shard::workspaces`] of
+/// `spec.preset` (workspace `w` has the seed `seed + w`), each optimised by every method of
+/// [`methods`] for `time_limit` seconds (stopping early when converged, or at `evaluations`),
+/// writing into `out`: each workspace's scenario and run folders, `runs.csv` (one line per
+/// run), `curves.csv` (averaged curves on a time grid), `curves.svg` and `experiment.json`.
 /// `log` receives a line per finished run.
 pub fn run_experiment(
-    preset: Preset,
-    runs: usize,
-    time_limit: f64,
-    seed: u64,
+    spec: &ExperimentSpec,
+    shard: Shard,
     out: &Path,
     log: &mut dyn FnMut(&str),
 ) -> Result<Vec<RunRecord>> {
+    spec.validate()?;
+    let (preset, time_limit, seed) = (spec.preset, spec.time_limit, spec.seed);
     let methods = methods(preset);
     let mut records = Vec::new();
-    for w in 0..runs {
+    let workspaces = shard.workspaces(spec.runs);
+    std::fs::create_dir_all(out).map_err(|source| crate::Error::Write {
+        path: out.to_path_buf(),
+        source,
+    })?;
+    for w in workspaces.clone() {
         let ws_seed = seed + w as u64;
-        let spec = preset::generate(preset, ws_seed);
+        let spec_w = preset::generate(preset, ws_seed);
         let dir = out.join(format!("workspace{w}"));
         std::fs::create_dir_all(&dir).map_err(|source| crate::Error::Write {
             path: dir.clone(),
             source,
         })?;
         let scenario_path = dir.join("scenario.toml");
-        write_atomic(&scenario_path, preset::to_toml(preset, &spec).as_bytes())?;
+        write_atomic(&scenario_path, preset::to_toml(preset, &spec_w).as_bytes())?;
         let scenario = Scenario::load(&scenario_path)?;
         for (k, m) in methods.iter().enumerate() {
             let mut planner = scenario.planner.clone();
@@ -156,7 +247,7 @@ pub fn run_experiment(
                 algorithm: m.algorithm,
                 seed: ws_seed,
                 time_limit: Some(time_limit),
-                evaluations: None,
+                evaluations: spec.evaluations,
                 patience: scenario.optimizer.patience,
                 checkpoint_interval: 1e9, // only the final checkpoint
                 // The paper's method as published: one planner run per evaluation, no final
@@ -190,6 +281,178 @@ pub fn run_experiment(
         }
     }
     write_tables(&methods, &records, time_limit, out)?;
+    let manifest = Manifest {
+        spec: spec.clone(),
+        shard,
+        workspaces: workspaces.collect(),
+    };
+    write_atomic(
+        &out.join(MANIFEST),
+        serde_json::to_string_pretty(&manifest)
+            .expect("a manifest serialises")
+            .as_bytes(),
+    )?;
+    Ok(records)
+}
+
+impl ExperimentSpec {
+    /// Checks the settings; errors name the option (`--time-limit`, …) and the value.
+    pub fn validate(&self) -> Result<()> {
+        if !(self.time_limit.is_finite() && self.time_limit > 0.0) {
+            return Err(crate::Error::invalid(
+                "--time-limit",
+                self.time_limit,
+                "must be positive and finite",
+            ));
+        }
+        if self.evaluations == Some(0) {
+            return Err(crate::Error::invalid(
+                "--evaluations",
+                0,
+                "must be at least 1",
+            ));
+        }
+        if self.runs > MAX_SHARDS {
+            return Err(crate::Error::invalid(
+                "--runs",
+                self.runs,
+                format!("must be at most {MAX_SHARDS}"),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Reads the `experiment.json` of an experiment folder.
+pub fn read_manifest(dir: &Path) -> Result<Manifest> {
+    let path = dir.join(MANIFEST);
+    let text =
+        crate::limits::read_text(&path, crate::limits::MAX_TEXT_FILE_BYTES).map_err(|source| {
+            crate::Error::Read {
+                path: path.clone(),
+                source,
+            }
+        })?;
+    let m: Manifest = serde_path_to_error::deserialize(&mut serde_json::Deserializer::from_str(
+        &text,
+    ))
+    .map_err(|e| crate::Error::Parse {
+        file: path.clone(),
+        message: e.to_string(),
+    })?;
+    m.spec.validate().map_err(|e| e.in_file(&path))?;
+    let expected: Vec<usize> = m.shard.workspaces(m.spec.runs).collect();
+    if m.shard.index == 0 || m.shard.index > m.shard.count || m.workspaces != expected {
+        return Err(crate::Error::invalid(
+            "workspaces",
+            format!("{:?}", m.workspaces),
+            format!(
+                "shard {} of {} runs holds {expected:?}",
+                m.shard, m.spec.runs
+            ),
+        )
+        .in_file(&path));
+    }
+    Ok(m)
+}
+
+/// Combines the folders of an experiment's slices (each written by [`run_experiment`] with
+/// its own [`Shard`] of the same [`ExperimentSpec`]) into `out`: the `runs.csv`, `curves.csv`
+/// and `curves.svg` that the whole experiment run at once writes from the same runs, and an
+/// `experiment.json` of the whole. Every workspace must come from exactly one folder; the
+/// runs' results and histories are read from their `best.json` and `checkpoint.json`.
+pub fn merge(dirs: &[std::path::PathBuf], out: &Path) -> Result<Vec<RunRecord>> {
+    let Some(first_dir) = dirs.first() else {
+        return Err(crate::Error::invalid(
+            "DIR",
+            "none",
+            "give the folders of the slices to merge",
+        ));
+    };
+    let manifests: Vec<Manifest> = dirs
+        .iter()
+        .map(|d| read_manifest(d))
+        .collect::<Result<_>>()?;
+    let spec = manifests[0].spec.clone();
+    let mut owner: Vec<Option<usize>> = vec![None; spec.runs];
+    for (i, m) in manifests.iter().enumerate() {
+        let path = dirs[i].join(MANIFEST);
+        if m.spec != spec {
+            return Err(crate::Error::invalid(
+                "spec",
+                format!("{:?}", m.spec),
+                format!(
+                    "is not the experiment of {} ({:?})",
+                    first_dir.join(MANIFEST).display(),
+                    spec
+                ),
+            )
+            .in_file(&path));
+        }
+        for &w in &m.workspaces {
+            if let Some(j) = owner[w] {
+                return Err(crate::Error::invalid(
+                    "workspaces",
+                    w,
+                    format!("workspace {w} is also in {}", dirs[j].display()),
+                )
+                .in_file(&path));
+            }
+            owner[w] = Some(i);
+        }
+    }
+    if let Some(w) = owner.iter().position(Option::is_none) {
+        return Err(crate::Error::invalid(
+            "DIR",
+            format!("{} folders", dirs.len()),
+            format!(
+                "workspace {w} of {} is in none of them (a slice is missing)",
+                spec.runs
+            ),
+        ));
+    }
+    let methods = methods(spec.preset);
+    let mut records = Vec::with_capacity(spec.runs * methods.len());
+    for (w, o) in owner.iter().enumerate() {
+        let dir = dirs[o.expect("checked above")].join(format!("workspace{w}"));
+        for k in 0..methods.len() {
+            let run_dir = dir.join(format!("method{k}"));
+            let best = run_dir.join(super::runner::files::BEST);
+            let text = crate::limits::read_text(&best, crate::limits::MAX_TEXT_FILE_BYTES)
+                .map_err(|source| crate::Error::Read {
+                    path: best.clone(),
+                    source,
+                })?;
+            let summary: RunSummary =
+                serde_json::from_str(&text).map_err(|e| crate::Error::Parse {
+                    file: best.clone(),
+                    message: e.to_string(),
+                })?;
+            let history = Runner::read_checkpoint(&run_dir)?.history;
+            records.push(RunRecord {
+                workspace: w,
+                method: k,
+                summary,
+                history,
+            });
+        }
+    }
+    std::fs::create_dir_all(out).map_err(|source| crate::Error::Write {
+        path: out.to_path_buf(),
+        source,
+    })?;
+    write_tables(&methods, &records, spec.time_limit, out)?;
+    let manifest = Manifest {
+        workspaces: (0..spec.runs).collect(),
+        spec,
+        shard: Shard::WHOLE,
+    };
+    write_atomic(
+        &out.join(MANIFEST),
+        serde_json::to_string_pretty(&manifest)
+            .expect("a manifest serialises")
+            .as_bytes(),
+    )?;
     Ok(records)
 }
 

@@ -3,8 +3,8 @@
 //! sets a variable to zero, and elitism.
 
 use super::{
-    check_len, check_points, evaluate_batch, keep_best, random_point, Evaluated, Optimizer,
-    StepContext, StepReport,
+    best_distinct, check_len, check_points, evaluate_batch, keep_best, random_point, Evaluated,
+    Optimizer, StepContext, StepReport,
 };
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
@@ -191,7 +191,7 @@ impl Optimizer for Ga {
             children
         };
         let evaluations = xs.len() as u64;
-        let evaluated = evaluate_batch(ctx.problem, xs, ctx.first_stream, ctx.progress);
+        let evaluated = evaluate_batch(ctx.problem, xs, ctx.first_stream, ctx.stride, ctx.progress);
         for e in &evaluated {
             keep_best(&mut self.best, e);
         }
@@ -216,6 +216,28 @@ impl Optimizer for Ga {
 
     fn candidates(&self) -> Vec<&Evaluated> {
         self.population.iter().chain(self.best.as_ref()).collect()
+    }
+
+    fn emigrants(&self, count: usize) -> Vec<Evaluated> {
+        best_distinct(&self.population, count)
+    }
+
+    fn immigrate(&mut self, migrants: &[Evaluated]) {
+        // The worst members make room (the order of the others is kept: it is part of the
+        // state that selection reads).
+        let mut order: Vec<usize> = (0..self.population.len()).collect();
+        order.sort_by(|&a, &b| {
+            self.population[b]
+                .cost
+                .total_cmp(&self.population[a].cost)
+                .then(b.cmp(&a))
+        });
+        for (&slot, m) in order.iter().zip(migrants) {
+            self.population[slot] = m.clone();
+        }
+        for m in migrants {
+            keep_best(&mut self.best, m);
+        }
     }
 
     fn validate(&self, dim: usize) -> Result<(), String> {

@@ -5,6 +5,7 @@
 pub mod asa;
 pub mod experiment;
 pub mod ga;
+pub mod islands;
 pub mod lock;
 pub mod objective;
 pub mod output;
@@ -58,17 +59,19 @@ impl Evaluated {
 }
 
 /// Evaluates a batch of points in parallel (rayon). Point `i` uses the random stream
-/// `first_stream + i`, so the results do not depend on the number of threads.
+/// `first_stream + i·stride`, so the results do not depend on the number of threads (`stride`
+/// is 1 for one population; island `i` of `N` uses the streams `≡ i (mod N)`).
 pub fn evaluate_batch(
     problem: &dyn Problem,
     xs: Vec<Vec<f64>>,
     first_stream: u64,
+    stride: u64,
     progress: f64,
 ) -> Vec<Evaluated> {
     xs.into_par_iter()
         .enumerate()
         .map(|(i, x)| {
-            let stream = first_stream + i as u64;
+            let stream = first_stream.wrapping_add((i as u64).wrapping_mul(stride));
             let (cost, reachability) = problem.evaluate(&x, stream, progress);
             Evaluated {
                 x,
@@ -95,8 +98,12 @@ pub struct StepContext<'a> {
     pub problem: &'a dyn Problem,
     /// Random numbers of this step (derived from the seed and the step index by the runner).
     pub rng: &'a mut ChaCha8Rng,
-    /// Stream of the step's first evaluation; the step uses consecutive streams.
+    /// Stream of the step's first evaluation; evaluation `j` of the step uses
+    /// `first_stream + j·stride`.
     pub first_stream: u64,
+    /// Distance between the streams of consecutive evaluations: 1 for one population, the
+    /// number of islands in an island job (each island keeps to its own residue class).
+    pub stride: u64,
     /// Progress ∈ [0, 1].
     pub progress: f64,
 }
@@ -116,6 +123,14 @@ pub trait Optimizer: Send {
     /// final population, the personal bests or the annealer's current and best points. The
     /// runner re-checks the best of them with fresh planner seeds.
     fn candidates(&self) -> Vec<&Evaluated>;
+    /// The `count` best distinct points, best first: what an island sends to the next one
+    /// when it migrates.
+    fn emigrants(&self, count: usize) -> Vec<Evaluated>;
+    /// Takes in points sent by another island (already evaluated): they replace the worst
+    /// members of the population (GA) or the worst particles (PSO, position and personal
+    /// best; velocities are kept), or the current point if the best of them is better (ASA).
+    /// The best so far is updated.
+    fn immigrate(&mut self, migrants: &[Evaluated]);
     /// Checks a restored state against a problem of dimension `dim`: every point and vector
     /// has `dim` values, every index is in range. The error names the field of the state, e.g.
     /// `population[3].x has 10 values, the problem 8`.
@@ -159,6 +174,25 @@ pub(crate) fn random_point(lower: &[f64], upper: &[f64], rng: &mut ChaCha8Rng) -
         .zip(upper)
         .map(|(&l, &u)| if u > l { rng.random_range(l..=u) } else { l })
         .collect()
+}
+
+/// The `count` best points of `pool` with distinct `x`, best first (ties: lower stream).
+pub(crate) fn best_distinct<'a>(
+    pool: impl IntoIterator<Item = &'a Evaluated>,
+    count: usize,
+) -> Vec<Evaluated> {
+    let mut pool: Vec<&Evaluated> = pool.into_iter().collect();
+    pool.sort_by(|a, b| a.cost.total_cmp(&b.cost).then(a.stream.cmp(&b.stream)));
+    let mut out: Vec<Evaluated> = Vec::with_capacity(count);
+    for e in pool {
+        if out.len() == count {
+            break;
+        }
+        if out.iter().all(|o| o.x != e.x) {
+            out.push(e.clone());
+        }
+    }
+    out
 }
 
 /// The better of two optional incumbents.

@@ -2,6 +2,7 @@
 //! summary (`best.json`) and the names of the files in its output directory. The exports
 //! (`export::plot`, `export::view`) read these types; the runner writes them.
 
+use super::islands::Migration;
 use super::objective::Breakdown;
 use crate::Design;
 use serde::{Deserialize, Serialize};
@@ -21,6 +22,32 @@ pub struct HistoryRow {
     pub best_links: usize,
     /// Joints kept by the best design so far.
     pub best_joints: usize,
+}
+
+/// One row of `islands.csv`: an island after a generation and its migration.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct IslandRow {
+    /// Generation (from 1).
+    pub generation: u64,
+    /// Island index (from 0).
+    pub island: usize,
+    /// Evaluations of this island so far.
+    pub evaluations: u64,
+    /// The island's best cost so far (a migrant counts once it has arrived).
+    pub best_cost: f64,
+    /// Reachability of that design.
+    pub best_reachability: f64,
+}
+
+/// Where an island job's results came from, as `best.json` records it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct IslandsInfo {
+    /// Number of islands.
+    pub islands: usize,
+    /// Migration settings.
+    pub migration: Migration,
+    /// The island whose best design was the job's best before the final re-check.
+    pub best_island: usize,
 }
 
 /// How `R` of a run's result held when re-checked with fresh planner seeds.
@@ -84,6 +111,9 @@ pub struct RunSummary {
     /// The cost of Eq. 23 with the lowest re-checked `R`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub robust_cost: Option<f64>,
+    /// The islands of an island job (absent for one population).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub islands: Option<IslandsInfo>,
     /// Seconds the final re-check took (included in `elapsed_s`; not written to `best.json`).
     #[serde(skip)]
     pub recheck_s: f64,
@@ -108,6 +138,8 @@ pub mod files {
     /// The browser report: the scene, the best design and its paths in 3D, with the run's
     /// convergence, cost breakdown and settings.
     pub const REPORT: &str = "report.html";
+    /// One row per island per generation (island jobs only).
+    pub const ISLANDS: &str = "islands.csv";
     /// Folder of the joint trajectories of the best design, one pair of files per reached task.
     pub const TRAJECTORIES: &str = "trajectories";
 }

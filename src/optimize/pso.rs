@@ -9,8 +9,8 @@
 //! * `global`: the classic swarm, pulled toward its own best and the swarm's best.
 
 use super::{
-    check_len, check_points, evaluate_batch, keep_best, random_point, Evaluated, Optimizer,
-    StepContext, StepReport,
+    best_distinct, check_len, check_points, evaluate_batch, keep_best, random_point, Evaluated,
+    Optimizer, StepContext, StepReport,
 };
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
@@ -224,7 +224,7 @@ impl Optimizer for Pso {
             self.particles.iter().map(|p| p.x.clone()).collect()
         };
         let evaluations = xs.len() as u64;
-        let evaluated = evaluate_batch(ctx.problem, xs, ctx.first_stream, ctx.progress);
+        let evaluated = evaluate_batch(ctx.problem, xs, ctx.first_stream, ctx.stride, ctx.progress);
         if self.particles.is_empty() {
             for e in evaluated {
                 let v = vmax
@@ -274,6 +274,30 @@ impl Optimizer for Pso {
             .map(|p| &p.best)
             .chain(self.best.as_ref())
             .collect()
+    }
+
+    fn emigrants(&self, count: usize) -> Vec<Evaluated> {
+        best_distinct(self.particles.iter().map(|p| &p.best), count)
+    }
+
+    fn immigrate(&mut self, migrants: &[Evaluated]) {
+        let mut order: Vec<usize> = (0..self.particles.len()).collect();
+        order.sort_by(|&a, &b| {
+            self.particles[b]
+                .best
+                .cost
+                .total_cmp(&self.particles[a].best.cost)
+                .then(b.cmp(&a))
+        });
+        for (&slot, m) in order.iter().zip(migrants) {
+            let p = &mut self.particles[slot];
+            p.x = m.x.clone();
+            p.best = m.clone();
+            p.stale = 0;
+        }
+        for m in migrants {
+            keep_best(&mut self.best, m);
+        }
     }
 
     fn validate(&self, dim: usize) -> Result<(), String> {

@@ -171,6 +171,9 @@ pub struct Checkpoint {
     /// The scenario's shape when the run started: links, free variables, obstacles, tasks.
     #[serde(default)]
     pub scenario_shape: Option<ScenarioShape>,
+    /// An island job's islands (then `state` is the array of their states, island by island).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub islands: Option<super::islands::IslandsCheckpoint>,
 }
 
 /// One free design variable as a checkpoint records it.
@@ -381,18 +384,81 @@ pub const RECHECK_STREAM: u64 = 1 << 50;
 pub const RECHECK_CANDIDATES: usize = 8;
 
 /// The counters of a run that a checkpoint records.
-#[derive(Clone, Copy)]
-struct Counters {
-    generation: u64,
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Counters {
+    /// Generations done.
+    pub generation: u64,
+    /// Evaluations done.
+    pub evaluations: u64,
+    /// Seconds spent.
+    pub elapsed_s: f64,
+    /// Generations since the best cost last improved.
+    pub stale: usize,
+}
+
+/// What [`Runner::prepare`] gives a run: its objective and what binds its checkpoints to the
+/// scenario.
+pub(crate) struct Setup {
+    /// The objective (paper Eq. 23) with the run's planner settings and seed.
+    pub objective: Objective,
+    /// The scenario file's fingerprint.
+    pub hash: String,
+    /// The scenario's shape.
+    pub shape: ScenarioShape,
+}
+
+/// The end of a run, as [`Runner::conclude`] takes it.
+pub(crate) struct Conclusion<'a> {
+    /// Optimiser name.
+    pub optimizer: &'static str,
+    /// The final candidates (population, swarm, annealer; of every island).
+    pub candidates: Vec<&'a Evaluated>,
+    /// The best point of the run.
+    pub best: Evaluated,
+    /// Counters at the end.
+    pub counters: Counters,
+    /// Seconds since the run started (over resumed sessions).
+    pub elapsed: &'a dyn Fn() -> f64,
+    /// Why it stopped.
+    pub stopped: String,
+    /// Its history.
+    pub history: &'a [HistoryRow],
+    /// An island job's islands.
+    pub islands: Option<super::islands::IslandsInfo>,
+}
+
+/// The random numbers of an optimiser step: the run's seed on stream
+/// `OPTIMIZER_STREAM + stream` (the generation, for one population).
+pub(crate) fn step_rng(seed: u64, stream: u64) -> ChaCha8Rng {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    rng.set_stream(OPTIMIZER_STREAM.wrapping_add(stream));
+    rng
+}
+
+/// The row of `history.csv` for the best point `best` after `evaluations` evaluations.
+pub(crate) fn history_row(
+    objective: &Objective,
+    best: &Evaluated,
     evaluations: u64,
     elapsed_s: f64,
-    stale: usize,
+) -> Result<HistoryRow> {
+    let design = objective.space().try_decode(&best.x)?;
+    Ok(HistoryRow {
+        elapsed_s,
+        evaluations,
+        best_cost: best.cost,
+        best_reachability: best.reachability,
+        best_links: design.links_kept(),
+        best_joints: design.joints_kept(),
+    })
 }
 
 /// Observes a run: called after every generation (for progress displays).
 pub trait Observer {
     /// The state after a generation.
     fn generation(&mut self, row: &HistoryRow);
+    /// Every island's state after a generation (island jobs only, after [`Self::generation`]).
+    fn islands(&mut self, _rows: &[super::islands::IslandRow]) {}
     /// The run is over.
     fn finish(&mut self) {}
 }
@@ -466,25 +532,8 @@ impl<'a> Runner<'a> {
             path: self.out.clone(),
             source,
         })?;
-        let checkpoint_path = self.out.join(files::CHECKPOINT);
-        let scenario_bytes =
-            crate::limits::read_file(&self.scenario_path, crate::limits::MAX_TEXT_FILE_BYTES)
-                .map_err(|source| Error::Read {
-                    path: self.scenario_path.clone(),
-                    source,
-                })?;
-        let scenario_hash = fingerprint(&scenario_bytes);
-        let shape = ScenarioShape::of(self.scenario);
-        if let Some(c) = &resume {
-            self.check_binding(c, &scenario_hash, &shape)
-                .map_err(|e| e.in_file(&checkpoint_path))?;
-            check_planner(&self.planner).map_err(|e| e.in_file(&checkpoint_path))?;
-        }
-        self.options
-            .validate()
-            .map_err(|e| e.in_file(&checkpoint_path))?;
-        let objective = Objective::new(self.scenario, self.planner.clone(), self.options.seed)
-            .with_confirmation(self.options.confirm_seeds);
+        let setup = self.prepare(resume.as_ref())?;
+        let objective = &setup.objective;
         let o = &self.options;
         let (
             mut optimizer,
@@ -494,66 +543,43 @@ impl<'a> Runner<'a> {
             mut stale,
             mut history,
         ) = match resume {
-            Some(c) => (
-                load_optimizer(o.algorithm, c.state, self.scenario.space.dim())
-                    .map_err(|e| e.in_file(&checkpoint_path))?,
-                c.generation,
-                c.evaluations,
-                c.elapsed_s,
-                c.stale,
-                c.history,
-            ),
-            None => {
-                // The largest design starts in the first generation: it reaches most.
-                let seeds = vec![self.scenario.space.encode(&self.scenario.space.largest())];
+            Some(c) => {
+                if let Some(i) = &c.islands {
+                    return Err(Error::invalid(
+                        "islands",
+                        i.islands,
+                        "the checkpoint holds an island job: resume it with --islands",
+                    )
+                    .in_file(self.checkpoint_path()));
+                }
                 (
-                    make_optimizer(self.scenario, o.algorithm, seeds),
-                    0,
-                    0,
-                    0.0,
-                    0,
-                    Vec::new(),
+                    load_optimizer(o.algorithm, c.state, self.scenario.space.dim())
+                        .map_err(|e| e.in_file(self.checkpoint_path()))?,
+                    c.generation,
+                    c.evaluations,
+                    c.elapsed_s,
+                    c.stale,
+                    c.history,
                 )
             }
+            None => (self.new_optimizer(), 0, 0, 0.0, 0, Vec::new()),
         };
         let start = Instant::now();
         let elapsed = || elapsed_before + start.elapsed().as_secs_f64();
         let mut last_checkpoint = Instant::now();
         let mut best_cost = optimizer.best().map_or(f64::INFINITY, |b| b.cost);
-        let stopped;
-        loop {
-            if stop.load(Ordering::SeqCst) {
-                stopped = "interrupted".to_string();
-                break;
+        let stopped = loop {
+            if let Some(why) =
+                self.stop_reason(stop, evaluations, elapsed(), optimizer.best(), stale)
+            {
+                break why;
             }
-            if o.evaluations.is_some_and(|n| evaluations >= n) {
-                stopped = "evaluation budget spent".to_string();
-                break;
-            }
-            if o.time_limit.is_some_and(|t| elapsed() >= t) {
-                stopped = "time limit reached".to_string();
-                break;
-            }
-            if let Some(b) = optimizer.best() {
-                if b.reachability >= 1.0 && stale >= o.patience {
-                    stopped = format!("converged: R = 1, no improvement for {stale} generations");
-                    break;
-                }
-            }
-            let progress = match (o.evaluations, o.time_limit) {
-                (Some(n), Some(t)) => (evaluations as f64 / n as f64).max(elapsed() / t),
-                (Some(n), None) => evaluations as f64 / n as f64,
-                (None, Some(t)) => elapsed() / t,
-                (None, None) => 0.0,
-            }
-            .clamp(0.0, 1.0);
-            let mut rng = ChaCha8Rng::seed_from_u64(o.seed);
-            rng.set_stream(OPTIMIZER_STREAM.wrapping_add(generation));
             let report = optimizer.step(StepContext {
-                problem: &objective,
-                rng: &mut rng,
+                problem: objective,
+                rng: &mut step_rng(o.seed, generation),
                 first_stream: evaluations,
-                progress,
+                stride: 1,
+                progress: self.progress(evaluations, elapsed()),
             });
             evaluations = evaluations.saturating_add(report.evaluations);
             generation = generation.saturating_add(1);
@@ -564,20 +590,13 @@ impl<'a> Runner<'a> {
             } else {
                 stale = stale.saturating_add(1);
             }
-            let best_design = objective.space().try_decode(&best.x)?;
-            let row = HistoryRow {
-                elapsed_s: elapsed(),
-                evaluations,
-                best_cost: best.cost,
-                best_reachability: best.reachability,
-                best_links: best_design.links_kept(),
-                best_joints: best_design.joints_kept(),
-            };
+            let row = history_row(objective, &best, evaluations, elapsed())?;
             observer.generation(&row);
             history.push(row);
             if last_checkpoint.elapsed().as_secs_f64() >= o.checkpoint_interval {
                 self.write_checkpoint(
-                    optimizer.as_ref(),
+                    optimizer.save(),
+                    None,
                     Counters {
                         generation,
                         evaluations,
@@ -585,29 +604,149 @@ impl<'a> Runner<'a> {
                         stale,
                     },
                     &history,
-                    (&scenario_hash, &shape),
+                    &setup,
                 )?;
                 last_checkpoint = Instant::now();
             }
-        }
+        };
         observer.finish();
-        self.write_checkpoint(
-            optimizer.as_ref(),
-            Counters {
-                generation,
-                evaluations,
-                elapsed_s: elapsed(),
-                stale,
-            },
-            &history,
-            (&scenario_hash, &shape),
-        )?;
+        let counters = Counters {
+            generation,
+            evaluations,
+            elapsed_s: elapsed(),
+            stale,
+        };
+        self.write_checkpoint(optimizer.save(), None, counters, &history, &setup)?;
         let best = optimizer
             .best()
             .cloned()
             .ok_or_else(|| Error::invalid("budget", 0, "the run stopped before any evaluation"))?;
+        self.conclude(
+            objective,
+            Conclusion {
+                optimizer: optimizer.name(),
+                candidates: optimizer.candidates(),
+                best,
+                counters,
+                elapsed: &elapsed,
+                stopped,
+                history: &history,
+                islands: None,
+            },
+        )
+    }
+
+    /// The checkpoint file of the run.
+    pub(crate) fn checkpoint_path(&self) -> PathBuf {
+        self.out.join(files::CHECKPOINT)
+    }
+
+    /// The run's options.
+    pub(crate) fn options(&self) -> &RunOptions {
+        &self.options
+    }
+
+    /// The scenario file (absolute when it could be resolved).
+    pub(crate) fn scenario_path(&self) -> &Path {
+        &self.scenario_path
+    }
+
+    /// The run's output directory.
+    pub(crate) fn out(&self) -> &Path {
+        &self.out
+    }
+
+    /// The scenario of the run.
+    pub(crate) fn scenario(&self) -> &Scenario {
+        self.scenario
+    }
+
+    /// Binds a checkpoint to the scenario (hash and shape),
+    /// checks the settings and builds the objective.
+    pub(crate) fn prepare(&self, resume: Option<&Checkpoint>) -> Result<Setup> {
+        let checkpoint_path = self.checkpoint_path();
+        let scenario_bytes =
+            crate::limits::read_file(&self.scenario_path, crate::limits::MAX_TEXT_FILE_BYTES)
+                .map_err(|source| Error::Read {
+                    path: self.scenario_path.clone(),
+                    source,
+                })?;
+        let hash = fingerprint(&scenario_bytes);
+        let shape = ScenarioShape::of(self.scenario);
+        if let Some(c) = resume {
+            self.check_binding(c, &hash, &shape)
+                .map_err(|e| e.in_file(&checkpoint_path))?;
+            check_planner(&self.planner).map_err(|e| e.in_file(&checkpoint_path))?;
+        }
+        self.options
+            .validate()
+            .map_err(|e| e.in_file(&checkpoint_path))?;
+        let objective = Objective::new(self.scenario, self.planner.clone(), self.options.seed)
+            .with_confirmation(self.options.confirm_seeds);
+        Ok(Setup {
+            objective,
+            hash,
+            shape,
+        })
+    }
+
+    /// A fresh optimiser of the run's algorithm; the largest design starts in its first
+    /// generation (it reaches most).
+    pub(crate) fn new_optimizer(&self) -> Box<dyn Optimizer> {
+        let seeds = vec![self.scenario.space.encode(&self.scenario.space.largest())];
+        make_optimizer(self.scenario, self.options.algorithm, seeds)
+    }
+
+    /// Restores an optimiser of the run's algorithm from a checkpoint's state.
+    pub(crate) fn load_optimizer(&self, state: serde_json::Value) -> Result<Box<dyn Optimizer>> {
+        load_optimizer(self.options.algorithm, state, self.scenario.space.dim())
+    }
+
+    /// Why the run stops before its next generation, if it does: Ctrl-C, a budget spent, or
+    /// convergence (`R = 1` and no improvement for `patience` generations).
+    pub(crate) fn stop_reason(
+        &self,
+        stop: &AtomicBool,
+        evaluations: u64,
+        elapsed: f64,
+        best: Option<&Evaluated>,
+        stale: usize,
+    ) -> Option<String> {
+        let o = &self.options;
+        if stop.load(Ordering::SeqCst) {
+            return Some("interrupted".to_string());
+        }
+        if o.evaluations.is_some_and(|n| evaluations >= n) {
+            return Some("evaluation budget spent".to_string());
+        }
+        if o.time_limit.is_some_and(|t| elapsed >= t) {
+            return Some("time limit reached".to_string());
+        }
+        match best {
+            Some(b) if b.reachability >= 1.0 && stale >= o.patience => Some(format!(
+                "converged: R = 1, no improvement for {stale} generations"
+            )),
+            _ => None,
+        }
+    }
+
+    /// How far the run is, in [0, 1], by its budgets (for schedules).
+    pub(crate) fn progress(&self, evaluations: u64, elapsed: f64) -> f64 {
+        match (self.options.evaluations, self.options.time_limit) {
+            (Some(n), Some(t)) => (evaluations as f64 / n as f64).max(elapsed / t),
+            (Some(n), None) => evaluations as f64 / n as f64,
+            (None, Some(t)) => elapsed / t,
+            (None, None) => 0.0,
+        }
+        .clamp(0.0, 1.0)
+    }
+
+    /// Ends a run: re-checks the candidates, evaluates the result once more for its report
+    /// and writes the results.
+    pub(crate) fn conclude(&self, objective: &Objective, c: Conclusion<'_>) -> Result<RunSummary> {
+        let o = &self.options;
         let recheck_start = Instant::now();
-        let (best, robust) = self.recheck(&objective, optimizer.as_ref(), best)?;
+        let (best, robust) = self.recheck(objective, c.candidates, c.best)?;
         let recheck_s = recheck_start.elapsed().as_secs_f64();
         let evaluation = objective.evaluate_confirmed(&best.x, best.stream, best.progress);
         let (report, breakdown) = (evaluation.report, evaluation.breakdown);
@@ -625,22 +764,23 @@ impl<'a> Runner<'a> {
             reachability: breakdown.reachability,
             links_kept: breakdown.links_kept,
             joints_kept: breakdown.joints_kept,
-            evaluations,
-            generations: generation,
-            elapsed_s: elapsed(),
+            evaluations: c.counters.evaluations,
+            generations: c.counters.generation,
+            elapsed_s: (c.elapsed)(),
             seed: o.seed,
-            optimizer: optimizer.name().to_string(),
+            optimizer: c.optimizer.to_string(),
             checker: self.planner.checker.name().to_string(),
             l_max: objective.planner_at(best.progress).l_max,
-            stopped,
+            stopped: c.stopped,
             breakdown,
             stream: evaluation.stream,
             planner: objective.planner_at(best.progress),
             robust_reachability: robust,
             robust_cost,
+            islands: c.islands,
             recheck_s,
         };
-        self.write_results(&summary, &report, &history)?;
+        self.write_results(&summary, &report, c.history)?;
         Ok(summary)
     }
 
@@ -680,7 +820,7 @@ impl<'a> Runner<'a> {
     fn recheck(
         &self,
         objective: &Objective,
-        optimizer: &dyn Optimizer,
+        candidates: Vec<&Evaluated>,
         best: Evaluated,
     ) -> Result<(Evaluated, Option<RobustReachability>)> {
         use rayon::prelude::*;
@@ -689,7 +829,7 @@ impl<'a> Runner<'a> {
             return Ok((best, None));
         }
         let space = objective.space();
-        let mut pool: Vec<&Evaluated> = optimizer.candidates();
+        let mut pool: Vec<&Evaluated> = candidates;
         pool.push(&best);
         pool.sort_by(|a, b| a.cost.total_cmp(&b.cost).then(a.stream.cmp(&b.stream)));
         let mut chosen: Vec<(Evaluated, Design)> = Vec::new();
@@ -750,9 +890,12 @@ impl<'a> Runner<'a> {
         Ok((chosen.swap_remove(c).0, Some(robust)))
     }
 
-    fn write_checkpoint(
+    /// Writes `checkpoint.json` (atomically) with the optimiser state `state` (for an island
+    /// job: the states of every island, with `islands`).
+    pub(crate) fn write_checkpoint(
         &self,
-        optimizer: &dyn Optimizer,
+        state: serde_json::Value,
+        islands: Option<super::islands::IslandsCheckpoint>,
         Counters {
             generation,
             evaluations,
@@ -760,7 +903,7 @@ impl<'a> Runner<'a> {
             stale,
         }: Counters,
         history: &[HistoryRow],
-        (hash, shape): (&str, &ScenarioShape),
+        setup: &Setup,
     ) -> Result<()> {
         let c = Checkpoint {
             scenario: self.scenario_path.clone(),
@@ -771,9 +914,10 @@ impl<'a> Runner<'a> {
             elapsed_s,
             stale,
             history: history.to_vec(),
-            state: optimizer.save(),
-            scenario_hash: Some(hash.to_string()),
-            scenario_shape: Some(shape.clone()),
+            state,
+            scenario_hash: Some(setup.hash.clone()),
+            scenario_shape: Some(setup.shape.clone()),
+            islands,
         };
         let json = serde_json::to_string(&c).expect("a checkpoint serialises");
         write_atomic(&self.out.join(files::CHECKPOINT), json.as_bytes())

@@ -3,6 +3,7 @@
 
 use crate::optimize::asa::AsaParams;
 use crate::optimize::ga::GaParams;
+use crate::optimize::islands::Migration;
 use crate::optimize::pso::PsoParams;
 use serde::{Deserialize, Serialize};
 
@@ -90,6 +91,9 @@ pub struct OptimizerConfig {
     /// Extra planner runs, on their own random streams, that confirm every `R = 1` an
     /// evaluation claims during the run; the first that falls short sets `R`. Default 2.
     pub confirm_seeds: usize,
+    /// Migration between islands (`kinsynth optimize --islands`): every `interval`
+    /// generations each island sends its best `count` designs to the next. Default 10 and 2.
+    pub migration: Migration,
     /// GA settings.
     pub ga: GaParams,
     /// PSO settings (`swarm` is taken from `population`).
@@ -109,6 +113,7 @@ impl Default for OptimizerConfig {
             checkpoint_interval: 10.0,
             recheck_seeds: 8,
             confirm_seeds: 2,
+            migration: Migration::default(),
             ga: GaParams::default(),
             pso: PsoParams::default(),
             asa: AsaParams::default(),

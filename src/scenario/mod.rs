@@ -320,6 +320,18 @@ impl Scenario {
             check(n > 0, "optimizer.evaluations", n, "must be at least 1")?;
         }
         check_non_negative(o.checkpoint_interval, "optimizer.checkpoint_interval")?;
+        check_count(
+            o.migration.interval,
+            1,
+            crate::limits::MAX_ITERATIONS,
+            "optimizer.migration.interval",
+        )?;
+        check_count(
+            o.migration.count,
+            0,
+            o.population,
+            "optimizer.migration.count",
+        )?;
         let ga = &o.ga;
         check(
             ga.elites < o.population,

@@ -12,14 +12,16 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::f64::consts::PI;
 
-/// A named scenario generator.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// A named scenario generator (serialised by its command-line name, `paper-2d`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Preset {
     /// Paper §IV-A: 8 links rotating about y, lengths free, 5 spheres and 10 tasks in the XZ
     /// plane.
+    #[serde(rename = "paper-2d")]
     Paper2d,
     /// Paper §IV-B: 8 links with rotations about x and y and a prismatic x axis, lengths and
     /// all those ranges free, 32 spheres and 10 tasks in 3D.
+    #[serde(rename = "paper-3d")]
     Paper3d,
 }
 

@@ -1,0 +1,406 @@
+//! The island model in one process and over ranks simulated by threads (no MPI needed):
+//! one island is the plain run, the result depends on the seed and the number of islands only
+//! (not on how islands are spread over ranks), migration follows the ring, and a stopped job
+//! resumes to the uninterrupted result.
+
+use kinsynth::optimize::islands::{Comm, IslandJob, IslandRow, Migration, SingleProcess};
+use kinsynth::optimize::runner::{HistoryRow, Observer, Quiet, RunOptions, Runner};
+use kinsynth::optimize::RunSummary;
+use kinsynth::scenario::Algorithm;
+use kinsynth::Scenario;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{channel, Receiver, Sender};
+use std::sync::{Arc, Barrier, Mutex};
+
+/// paper-2d with a population of 8, written into `dir`.
+fn small_scenario(dir: &Path) -> PathBuf {
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scenarios/paper-2d.toml"),
+    )
+    .unwrap()
+    .replace("population = 32", "population = 8");
+    assert!(text.contains("population = 8"));
+    let path = dir.join("small.toml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+fn options(algorithm: Algorithm, evaluations: u64) -> RunOptions {
+    RunOptions {
+        algorithm,
+        seed: 5,
+        time_limit: None,
+        evaluations: Some(evaluations),
+        patience: 1000,
+        checkpoint_interval: 0.0,
+        recheck_seeds: 2,
+        confirm_seeds: 1,
+    }
+}
+
+fn best_json(dir: &Path) -> serde_json::Value {
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("best.json")).unwrap()).unwrap();
+    v.as_object_mut().unwrap().remove("elapsed_s");
+    v
+}
+
+fn island_rows(dir: &Path) -> Vec<Vec<String>> {
+    let text = std::fs::read_to_string(dir.join("islands.csv")).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next(),
+        Some("generation,island,evaluations,best_cost,best_reachability")
+    );
+    lines
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect()
+}
+
+/// Runs an island job of `n` islands in one process.
+fn islands(
+    scenario: &Path,
+    out: &Path,
+    n: usize,
+    migration: Migration,
+    o: RunOptions,
+) -> RunSummary {
+    let s = Scenario::load(scenario).unwrap();
+    let runner = Runner::new(&s, scenario, s.planner.clone(), o, out);
+    IslandJob::new(&runner, n, migration)
+        .run(&SingleProcess, None, &AtomicBool::new(false), &mut Quiet)
+        .unwrap()
+        .expect("rank 0 gets the outcome")
+        .summary
+}
+
+#[test]
+fn one_island_is_the_plain_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let scenario = small_scenario(dir.path());
+    let s = Scenario::load(&scenario).unwrap();
+    for algorithm in [Algorithm::Ga, Algorithm::Pso] {
+        let plain = dir.path().join(format!("plain-{algorithm:?}"));
+        let runner = Runner::new(
+            &s,
+            &scenario,
+            s.planner.clone(),
+            options(algorithm, 40),
+            &plain,
+        );
+        runner
+            .run(None, &AtomicBool::new(false), &mut Quiet)
+            .unwrap();
+        let island = dir.path().join(format!("island-{algorithm:?}"));
+        islands(
+            &scenario,
+            &island,
+            1,
+            Migration::default(),
+            options(algorithm, 40),
+        );
+        let mut got = best_json(&island);
+        assert_eq!(got["islands"]["islands"], 1);
+        got.as_object_mut().unwrap().remove("islands");
+        assert_eq!(got, best_json(&plain), "{algorithm:?}");
+        let history = |d: &Path| std::fs::read_to_string(d.join("history.csv")).unwrap();
+        let cut = |t: String| -> Vec<String> {
+            t.lines()
+                .map(|l| l.split_once(',').map_or(l, |(_, rest)| rest).to_string())
+                .collect()
+        };
+        assert_eq!(cut(history(&island)), cut(history(&plain)));
+        // 40 evaluations: GA 8 + 6 children (2 elites) per generation, PSO 8 per generation.
+        let generations = if algorithm == Algorithm::Ga { 7 } else { 5 };
+        assert_eq!(
+            island_rows(&island).len(),
+            generations,
+            "one row per generation"
+        );
+    }
+}
+
+#[test]
+fn the_same_seed_and_number_of_islands_give_the_same_result_and_migration_follows_the_ring() {
+    let dir = tempfile::tempdir().unwrap();
+    let scenario = small_scenario(dir.path());
+    let every = Migration {
+        interval: 1,
+        count: 2,
+    };
+    let a = dir.path().join("a");
+    let b = dir.path().join("b");
+    islands(&scenario, &a, 3, every, options(Algorithm::Ga, 96));
+    islands(&scenario, &b, 3, every, options(Algorithm::Ga, 96));
+    assert_eq!(best_json(&a), best_json(&b));
+    assert_eq!(island_rows(&a), island_rows(&b));
+    let rows = island_rows(&a);
+    // 96 evaluations by 3 islands of 8: 24 and then 18 (2 elites each) per generation.
+    assert_eq!(rows.len(), 5 * 3, "5 generations of 3 islands");
+    // Migration after every generation along the ring 0 → 1 → 2 → 0: island i+1 takes in
+    // island i's best of this generation, which is no worse than island i's best of the last.
+    let cost =
+        |rows: &[Vec<String>], g: usize, i: usize| -> f64 { rows[g * 3 + i][3].parse().unwrap() };
+    for g in 1..5 {
+        for i in 0..3 {
+            assert!(
+                cost(&rows, g, (i + 1) % 3) <= cost(&rows, g - 1, i),
+                "generation {g}: island {} is worse than island {i} was: {rows:?}",
+                (i + 1) % 3
+            );
+        }
+    }
+    // Without migration the islands keep apart.
+    let apart = dir.path().join("apart");
+    islands(
+        &scenario,
+        &apart,
+        3,
+        Migration {
+            interval: 1,
+            count: 0,
+        },
+        options(Algorithm::Ga, 96),
+    );
+    let apart = island_rows(&apart);
+    assert!(
+        (1..5).any(|g| (0..3).any(|i| cost(&apart, g, (i + 1) % 3) > cost(&apart, g - 1, i))),
+        "islands without migration look as if they migrated: {apart:?}"
+    );
+    // Two islands that migrate after every generation share their best.
+    let two = dir.path().join("two");
+    islands(&scenario, &two, 2, every, options(Algorithm::Ga, 64));
+    for g in island_rows(&two).chunks(2) {
+        assert_eq!(g[0][3], g[1][3]);
+    }
+    // And a different number of islands gives another job.
+    let four = dir.path().join("four");
+    islands(&scenario, &four, 4, every, options(Algorithm::Ga, 96));
+    assert_ne!(island_rows(&four), island_rows(&a));
+}
+
+/// Ranks simulated by threads: a channel per ordered pair of ranks.
+struct ThreadComm {
+    rank: usize,
+    size: usize,
+    to: Vec<Sender<Vec<u8>>>,
+    from: Vec<Mutex<Receiver<Vec<u8>>>>,
+    barrier: Arc<Barrier>,
+}
+
+fn thread_comms(size: usize) -> Vec<ThreadComm> {
+    let mut senders: Vec<Vec<Option<Sender<Vec<u8>>>>> = (0..size).map(|_| vec![]).collect();
+    let mut receivers: Vec<Vec<Option<Receiver<Vec<u8>>>>> = (0..size)
+        .map(|_| (0..size).map(|_| None).collect())
+        .collect();
+    for (from, s) in senders.iter_mut().enumerate() {
+        for (to, r) in receivers.iter_mut().enumerate() {
+            let (tx, rx) = channel();
+            s.push(Some(tx));
+            r[from] = Some(rx);
+            let _ = to;
+        }
+    }
+    let barrier = Arc::new(Barrier::new(size));
+    senders
+        .into_iter()
+        .zip(receivers)
+        .enumerate()
+        .map(|(rank, (s, r))| ThreadComm {
+            rank,
+            size,
+            to: s.into_iter().map(Option::unwrap).collect(),
+            from: r.into_iter().map(|r| Mutex::new(r.unwrap())).collect(),
+            barrier: barrier.clone(),
+        })
+        .collect()
+}
+
+impl ThreadComm {
+    fn recv(&self, from: usize) -> Vec<u8> {
+        self.from[from].lock().unwrap().recv().unwrap()
+    }
+}
+
+impl Comm for ThreadComm {
+    fn rank(&self) -> usize {
+        self.rank
+    }
+    fn size(&self) -> usize {
+        self.size
+    }
+    fn ring_shift(&self, bytes: &[u8]) -> kinsynth::Result<Vec<u8>> {
+        self.to[(self.rank + 1) % self.size]
+            .send(bytes.to_vec())
+            .unwrap();
+        Ok(self.recv((self.rank + self.size - 1) % self.size))
+    }
+    fn gather(&self, bytes: &[u8]) -> kinsynth::Result<Option<Vec<Vec<u8>>>> {
+        if self.rank != 0 {
+            self.to[0].send(bytes.to_vec()).unwrap();
+            return Ok(None);
+        }
+        let mut all = vec![bytes.to_vec()];
+        all.extend((1..self.size).map(|r| self.recv(r)));
+        Ok(Some(all))
+    }
+    fn broadcast(&self, bytes: &[u8]) -> kinsynth::Result<Vec<u8>> {
+        if self.rank == 0 {
+            for r in 1..self.size {
+                self.to[r].send(bytes.to_vec()).unwrap();
+            }
+            Ok(bytes.to_vec())
+        } else {
+            Ok(self.recv(0))
+        }
+    }
+    fn barrier(&self) {
+        self.barrier.wait();
+    }
+    fn abort(&self, _: i32) {}
+}
+
+/// Runs an island job of `n` islands over `ranks` thread-ranks.
+fn islands_on_ranks(scenario: &Path, out: &Path, n: usize, ranks: usize, o: RunOptions) {
+    let s = Scenario::load(scenario).unwrap();
+    let migration = Migration {
+        interval: 2,
+        count: 2,
+    };
+    std::thread::scope(|scope| {
+        let handles: Vec<_> = thread_comms(ranks)
+            .into_iter()
+            .map(|comm| {
+                let (s, o) = (&s, o.clone());
+                scope.spawn(move || {
+                    let runner = Runner::new(s, scenario, s.planner.clone(), o, out);
+                    let got = IslandJob::new(&runner, n, migration)
+                        .run(&comm, None, &AtomicBool::new(false), &mut Quiet)
+                        .unwrap();
+                    assert_eq!(got.is_some(), comm.rank == 0);
+                })
+            })
+            .collect();
+        for h in handles {
+            h.join().unwrap();
+        }
+    });
+}
+
+#[test]
+fn the_result_does_not_depend_on_how_islands_are_spread_over_ranks() {
+    let dir = tempfile::tempdir().unwrap();
+    let scenario = small_scenario(dir.path());
+    for algorithm in [Algorithm::Ga, Algorithm::Pso] {
+        let o = options(algorithm, 160);
+        let one = dir.path().join(format!("one-{algorithm:?}"));
+        islands_on_ranks(&scenario, &one, 4, 1, o.clone());
+        let two = dir.path().join(format!("two-{algorithm:?}"));
+        islands_on_ranks(&scenario, &two, 4, 2, o.clone());
+        let four = dir.path().join(format!("four-{algorithm:?}"));
+        islands_on_ranks(&scenario, &four, 4, 4, o);
+        assert_eq!(best_json(&one), best_json(&two), "{algorithm:?}");
+        assert_eq!(best_json(&one), best_json(&four), "{algorithm:?}");
+        assert_eq!(island_rows(&one), island_rows(&four), "{algorithm:?}");
+    }
+}
+
+/// Raises `stop` after `after` generations, as Ctrl-C would.
+struct StopAfter {
+    after: usize,
+    seen: usize,
+    islands_seen: usize,
+    stop: Arc<AtomicBool>,
+}
+
+impl Observer for StopAfter {
+    fn generation(&mut self, _: &HistoryRow) {
+        self.seen += 1;
+        if self.seen == self.after {
+            self.stop.store(true, Ordering::SeqCst);
+        }
+    }
+    fn islands(&mut self, rows: &[IslandRow]) {
+        assert_eq!(rows.len(), 2);
+        self.islands_seen += 1;
+    }
+}
+
+#[test]
+fn a_stopped_job_resumes_to_the_uninterrupted_result_and_refuses_another_number_of_islands() {
+    let dir = tempfile::tempdir().unwrap();
+    let scenario = small_scenario(dir.path());
+    let s = Scenario::load(&scenario).unwrap();
+    let migration = Migration {
+        interval: 2,
+        count: 1,
+    };
+    let whole = dir.path().join("whole");
+    islands(
+        &scenario,
+        &whole,
+        2,
+        migration,
+        options(Algorithm::Pso, 112),
+    );
+
+    let stopped = dir.path().join("stopped");
+    let runner = Runner::new(
+        &s,
+        &scenario,
+        s.planner.clone(),
+        options(Algorithm::Pso, 112),
+        &stopped,
+    );
+    let stop = Arc::new(AtomicBool::new(false));
+    let mut observer = StopAfter {
+        after: 3,
+        seen: 0,
+        islands_seen: 0,
+        stop: stop.clone(),
+    };
+    IslandJob::new(&runner, 2, migration)
+        .run(&SingleProcess, None, &stop, &mut observer)
+        .unwrap();
+    assert_eq!(observer.islands_seen, 3);
+    assert_eq!(best_json(&stopped)["stopped"], "interrupted");
+    let checkpoint = Runner::read_checkpoint(&stopped).unwrap();
+    assert_eq!(checkpoint.generation, 3);
+    assert_eq!(checkpoint.islands.as_ref().unwrap().islands, 2);
+
+    // Another number of islands, or no islands, is refused with a clear error.
+    let err = IslandJob::new(&runner, 3, migration)
+        .run(
+            &SingleProcess,
+            Some(checkpoint.clone()),
+            &AtomicBool::new(false),
+            &mut Quiet,
+        )
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("checkpoint.json") && err.contains("holds 2 islands, this job has 3"),
+        "{err}"
+    );
+    let err = runner
+        .run(
+            Some(checkpoint.clone()),
+            &AtomicBool::new(false),
+            &mut Quiet,
+        )
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("resume it with --islands"), "{err}");
+
+    IslandJob::new(&runner, 2, migration)
+        .run(
+            &SingleProcess,
+            Some(checkpoint),
+            &AtomicBool::new(false),
+            &mut Quiet,
+        )
+        .unwrap();
+    assert_eq!(best_json(&stopped), best_json(&whole));
+    assert_eq!(island_rows(&stopped), island_rows(&whole));
+}
