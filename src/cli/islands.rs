@@ -51,6 +51,8 @@ pub fn run(args: Args, islands: Option<usize>) -> Result<(), kinsynth::Error> {
                 eprintln!("error: {error}");
             }
             comm.barrier();
+            // Finalise MPI before this process ends.
+            #[cfg(feature = "mpi")]
             drop(comm);
             std::process::exit(1)
         }
