@@ -383,20 +383,42 @@ impl EdgeChecker for Certified {
                 } else {
                     (it.other as usize, body.level(b))
                 };
-                let reach = it
-                    .reach
-                    .min(work.local_reach(bounds, body, fm, pm, pose, q, from, half));
-                let (cm, hint) = if it.other == ENV {
-                    // Both children are proven once cm exceeds this.
-                    let need = (half * reach - it.c0.min(it.c1)).max(0.0) + CAP_MARGIN;
-                    let ball = body.ball(fm, pm, b);
-                    body.clearance(scene, fm, pm, b, &ball, need, it.hint)
-                } else {
-                    (body.pair_distance(fm, pm, b, it.other as usize), u32::MAX)
-                };
+                if it.other != ENV {
+                    // A self pair: its distance first; the lever arms at tm only when the
+                    // children are not proven without them (the decision is the same).
+                    let cm = body.pair_distance(fm, pm, b, it.other as usize);
+                    if cm <= 0.0 {
+                        return false;
+                    }
+                    let proven = |r: f64| it.c0.min(it.c1) + cm > half * r;
+                    let reach = if proven(it.reach) {
+                        it.reach
+                    } else {
+                        it.reach
+                            .min(work.local_reach(bounds, body, fm, pm, pose, q, from, half))
+                    };
+                    work.mid.push(Mid {
+                        c: cm,
+                        reach,
+                        hint: u32::MAX,
+                    });
+                    continue;
+                }
+                // Against the environment: both children are proven once cm exceeds `need`
+                // for the parent's bound; below it the clearance is exact, and the lever arms
+                // at tm tighten the bound (the decision is the same as with the tight cap).
+                let need = (half * it.reach - it.c0.min(it.c1)).max(0.0) + CAP_MARGIN;
+                let ball = body.ball(fm, pm, b);
+                let (cm, hint) = body.clearance(scene, fm, pm, b, &ball, need, it.hint);
                 if cm <= 0.0 {
                     return false;
                 }
+                let reach = if it.c0.min(it.c1) + cm > half * it.reach {
+                    it.reach
+                } else {
+                    it.reach
+                        .min(work.local_reach(bounds, body, fm, pm, pose, q, from, half))
+                };
                 work.mid.push(Mid { c: cm, reach, hint });
             }
             let parent = iv.start..iv.start + iv.len;
