@@ -396,6 +396,7 @@ mod tests {
                 },
                 LinkDesign::default(),
             ],
+            tool: None,
         }
     }
 

@@ -251,6 +251,7 @@ mod tests {
                     ..LinkDesign::default()
                 },
             ],
+            tool: None,
         }
     }
 

@@ -517,6 +517,7 @@ impl Scenario {
             link_radius: r.link_radius,
             colliders_per_link: r.colliders_per_link,
             links,
+            tool: None,
         };
         let space = DesignSpace::new(template, vars, r.snap).map_err(at("robot"))?;
         // The template's free values are placeholders: normalise them through decode.
