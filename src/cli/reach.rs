@@ -94,25 +94,16 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         .into_par_iter()
         .map(|k| {
             let seed = first_seed.wrapping_add(k);
-            match &body {
-                Some(body) => kinsynth::planning::reach::reachability_of(
-                    &chain,
-                    body.clone(),
-                    &scene,
-                    &s.workspace.tasks,
-                    &planner,
-                    seed,
-                    stream,
-                ),
-                None => kinsynth::planning::reachability(
-                    &chain,
-                    &scene,
-                    &s.workspace.tasks,
-                    &planner,
-                    seed,
-                    stream,
-                ),
-            }
+            kinsynth::planning::reachability_tasks(
+                &chain,
+                body.clone(),
+                &scene,
+                &s.workspace.tasks,
+                &s.workspace.orientations,
+                &planner,
+                seed,
+                stream,
+            )
         })
         .collect();
     let elapsed = start.elapsed();
@@ -164,8 +155,13 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         say!("  {why}");
     }
     for t in &report.targets {
+        let angle = match (t.orientation_error, t.approach_error) {
+            (Some(e), _) => format!("  orientation {:.2}°", e.to_degrees()),
+            (_, Some(e)) => format!("  approach {:.2}°", e.to_degrees()),
+            _ => String::new(),
+        };
         say!(
-            "  task {:>3} {:<11} error {:.4} m  path {}",
+            "  task {:>3} {:<11} error {:.4} m{angle}  path {}",
             t.index,
             if t.reached { "reached" } else { "not reached" },
             t.error,
@@ -173,6 +169,11 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
                 .as_ref()
                 .map_or("-".to_string(), |p| format!("{} nodes", p.points.len()))
         );
+        if let Some(why) = &t.reason {
+            if report.home_blocked.is_none() {
+                say!("      {why}");
+            }
+        }
     }
     if let Some(path) = json {
         let mut v = serde_json::to_value(&report).expect("a report serialises");
