@@ -42,11 +42,19 @@ pub fn run(args: Args, islands: Option<usize>) -> Result<(), kinsynth::Error> {
             error,
             on_every_rank: true,
         }) => {
-            if comm.rank() == 0 {
-                Err(error)
-            } else {
-                std::process::exit(1)
+            if comm.size() == 1 {
+                return Err(error);
             }
+            // Rank 0 reports it before any rank ends: the launcher kills the job as soon as
+            // one rank exits with a failure, which could be before rank 0 has printed it.
+            if comm.rank() == 0 {
+                eprintln!("error: {error}");
+            }
+            comm.barrier();
+            // Finalise MPI before this process ends.
+            #[cfg(feature = "mpi")]
+            drop(comm);
+            std::process::exit(1)
         }
         // This rank failed alone while the others may wait for it: end the whole job.
         Err(JobError { error, .. }) => {
