@@ -231,18 +231,18 @@ pub fn reachability_tasks(
                     "the home pose is blocked".to_string()
                 } else if far > bound + config.goal_tolerance {
                     format!(
-                        "the point is {far:.4} m from the base, beyond the design's reach bound of                          {bound:.4} m plus the goal tolerance"
+                        "the point is {far:.4} m from the base, beyond the design's reach bound of {bound:.4} m plus the goal tolerance"
                     )
                 } else if let Some(why) = super::feasible::impossible_orientation(chain, &o) {
                     why
                 } else if o.is_free() {
                     format!(
-                        "no collision-free path brought the tool within {} m of the point in {}                          iterations (closest {error:.4} m)",
+                        "no collision-free path brought the tool within {} m of the point in {} iterations (closest {error:.4} m)",
                         config.goal_tolerance, growth.iterations
                     )
                 } else {
                     format!(
-                        "no collision-free path brought the tool within {} m of the point and                          {:.1}° of the task's {} in {} iterations (closest node: {error:.4} m,                          {:.1}°)",
+                        "no collision-free path brought the tool within {} m of the point and {:.1}° of the task's {} in {} iterations (closest node: {error:.4} m, {:.1}°)",
                         config.goal_tolerance,
                         o.tolerance().to_degrees(),
                         match o {
