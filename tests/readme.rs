@@ -30,8 +30,14 @@ fn scenario_example_is_valid() {
     let o = &s.workspace.orientations;
     assert_eq!(o.len(), 3);
     assert!(o[0].is_free());
-    assert!(matches!(o[1], kinsynth::world::TaskOrientation::Pose { .. }));
-    assert!(matches!(o[2], kinsynth::world::TaskOrientation::Approach { .. }));
+    assert!(matches!(
+        o[1],
+        kinsynth::world::TaskOrientation::Pose { .. }
+    ));
+    assert!(matches!(
+        o[2],
+        kinsynth::world::TaskOrientation::Approach { .. }
+    ));
     assert!(s.space.largest().chain().has_tool());
 }
 
