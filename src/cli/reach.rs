@@ -34,6 +34,10 @@ pub struct Args {
     /// Write the report as JSON to this file (atomically).
     #[arg(long)]
     pub json: Option<PathBuf>,
+    /// Put the planner's tree (each node's end effector and parent) into the --json report,
+    /// for `kinsynth view` to draw.
+    #[arg(long)]
+    pub tree: bool,
     #[command(flatten)]
     pub urdf: UrdfReach,
 }
@@ -48,6 +52,7 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         seed,
         seeds,
         json,
+        tree,
         urdf,
     } = args;
     use rayon::prelude::*;
@@ -94,7 +99,12 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         .into_par_iter()
         .map(|k| {
             let seed = first_seed.wrapping_add(k);
-            kinsynth::planning::reachability_tasks(
+            let plan = if tree && k == 0 {
+                kinsynth::planning::reach::reachability_with_tree
+            } else {
+                kinsynth::planning::reachability_tasks
+            };
+            plan(
                 &chain,
                 body.clone(),
                 &scene,

@@ -252,6 +252,7 @@ mod tests {
             ..crate::planning::TargetReport::default()
         };
         let report = ReachReport {
+            tree: None,
             reachability: 0.5,
             checker: "segment".into(),
             l_max: 1.0,
