@@ -557,3 +557,87 @@ fn tool0_of_the_exported_urdf_meets_every_reached_task() {
     let checked = check_tool0_against_report(&urdf, &sp, &posed_report);
     assert!(checked >= 2, "{checked} reached pose tasks: {out}");
 }
+
+/// The proof of [`kinsynth::planning::feasible::impossible_orientation`] against brute force: on
+/// random planar arms (revolute joints about y, a tilted tool) and random approach cones and
+/// poses, an orientation it calls impossible is met by none of 3,000 random configurations, and
+/// one that some configuration meets is never called impossible. A spatial arm is never called
+/// impossible.
+#[test]
+fn impossible_orientations_are_never_met_by_sampled_configurations() {
+    use kinsynth::planning::feasible::impossible_orientation;
+    let mut rng = ChaCha8Rng::seed_from_u64(77);
+    let (mut proven, mut met) = (0, 0);
+    for case in 0..40 {
+        let n = rng.random_range(1..4);
+        let links: Vec<LinkDesign> = (0..n)
+            .map(|_| LinkDesign {
+                a: rng.random_range(0.1..0.5),
+                axes: ranges(&[(Axis::Ry, -PI, PI)]),
+                ..LinkDesign::default()
+            })
+            .collect();
+        let spatial = case % 10 == 9;
+        let mut design = Design {
+            base: Placement::default(),
+            link_radius: 0.02,
+            colliders_per_link: 1,
+            links,
+            tool: Some(Placement {
+                position: [0.0, 0.0, 0.05],
+                rpy: [
+                    rng.random_range(-PI..PI),
+                    rng.random_range(-PI..PI),
+                    rng.random_range(-PI..PI),
+                ],
+            }),
+        };
+        if spatial {
+            *design.links[0].axes.get_mut(Axis::Rx) = Range::new(-1.0, 1.0);
+        }
+        let chain = design.chain();
+        let mut f = chain.frames();
+        for _ in 0..10 {
+            let v = Vector3::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+            );
+            let tol = rng.random_range(0.0..0.6);
+            let o = if rng.random::<bool>() {
+                TaskOrientation::Approach {
+                    axis: Unit::new_normalize(v),
+                    tolerance: tol,
+                }
+            } else {
+                TaskOrientation::Pose {
+                    rotation: Rotation3::new(v * 2.0),
+                    tolerance: tol,
+                }
+            };
+            let claim = impossible_orientation(&chain, &o);
+            if spatial {
+                assert!(claim.is_none(), "{claim:?}");
+                continue;
+            }
+            let mut best = f64::INFINITY;
+            for _ in 0..3000 {
+                let q = random_config(&chain, &mut rng);
+                chain.fk(&q, &mut f);
+                best = best.min(o.error(f.tcp_rotation()));
+            }
+            if claim.is_some() {
+                proven += 1;
+                assert!(best > tol, "case {case}: met at {best} ≤ {tol}: {claim:?}");
+            } else {
+                // Not proven: some turn about y meets it, which 3,000 samples come near.
+                met += 1;
+                assert!(
+                    best <= tol + 0.01,
+                    "case {case}: best {best}, tolerance {tol}"
+                );
+            }
+        }
+    }
+    assert!(proven > 50 && met > 20, "proven {proven}, met {met}");
+}
