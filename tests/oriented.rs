@@ -509,6 +509,27 @@ fn tool0_of_the_exported_urdf_meets_every_reached_task() {
     let again: ReachReport =
         serde_json::from_str(&std::fs::read_to_string(&json2).unwrap()).unwrap();
     assert_eq!(again.reached(), report.reached());
+    assert_eq!(
+        (again.iterations, again.nodes, again.edge_checks),
+        (report.iterations, report.nodes, report.edge_checks)
+    );
+    // The default body (the URDF's collision elements, a kinsynth export's capsules) too.
+    let json4 = dir.path().join("r4.json");
+    let (ok, _, err) = kinsynth(&[
+        "reach",
+        scn,
+        "--urdf",
+        urdf.to_str().unwrap(),
+        "--json",
+        json4.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let collision: ReachReport =
+        serde_json::from_str(&std::fs::read_to_string(&json4).unwrap()).unwrap();
+    assert_eq!(
+        (collision.iterations, collision.nodes, collision.reached()),
+        (report.iterations, report.nodes, report.reached())
+    );
     for (a, b) in again.targets.iter().zip(&report.targets) {
         assert!((a.position_error - b.position_error).abs() < 1e-9);
         assert!((a.approach_error.unwrap() - b.approach_error.unwrap()).abs() < 1e-9);
