@@ -110,3 +110,84 @@ fn a_reach_report_of_another_robot_or_scenario_is_a_one_line_error() {
     assert!(err.contains("reach.json: targets[2].point = [9.5"), "{err}");
     assert!(!page.exists());
 }
+
+/// `reach --tree` adds the planner's tree and changes nothing else; the tree is one tree rooted
+/// at node 0 holding every reached task's last path point; `view` refuses a broken tree.
+#[test]
+fn reach_tree_is_the_planners_tree_and_a_broken_tree_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let (plain, with_tree) = (dir.path().join("plain.json"), dir.path().join("tree.json"));
+    let file = scenario("paper-2d");
+    for (out, extra) in [(&plain, None), (&with_tree, Some("--tree"))] {
+        let mut args: Vec<&std::ffi::OsStr> = vec![
+            "reach".as_ref(),
+            file.as_os_str(),
+            "--json".as_ref(),
+            out.as_os_str(),
+        ];
+        args.extend(extra.map(std::ffi::OsStr::new));
+        let o = kinsynth(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let read = |p: &Path| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+    };
+    let (a, mut b) = (read(&plain), read(&with_tree));
+    assert!(a.get("tree").is_none(), "no tree unless asked for");
+    let tree = b.as_object_mut().unwrap().remove("tree").expect("a tree");
+    assert_eq!(a, b, "the tree changes nothing else");
+    let parents: Vec<usize> = tree["parents"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p.as_u64().unwrap() as usize)
+        .collect();
+    let ees = tree["end_effectors"].as_array().unwrap();
+    assert_eq!(parents.len(), a["nodes"].as_u64().unwrap() as usize);
+    assert_eq!(ees.len(), parents.len());
+    assert_eq!(parents[0], 0, "the root is its own parent");
+    for start in 0..parents.len() {
+        let (mut n, mut steps) = (start, 0);
+        while n != 0 {
+            n = parents[n];
+            steps += 1;
+            assert!(
+                steps <= parents.len(),
+                "node {start} does not lead to the root"
+            );
+        }
+    }
+    // Every reached task's end effector is a node of the tree.
+    for t in a["targets"].as_array().unwrap() {
+        if t["reached"] == true {
+            let ee = &t["end_effector"];
+            assert!(
+                ees.iter().any(|e| (0..3)
+                    .all(|k| (e[k].as_f64().unwrap() - ee[k].as_f64().unwrap()).abs() < 1e-12)),
+                "task {} ends off the tree",
+                t["index"]
+            );
+        }
+    }
+    // A parent that names no node.
+    let mut broken = read(&with_tree);
+    broken["tree"]["parents"][3] = 1_000_000.into();
+    std::fs::write(&with_tree, broken.to_string()).unwrap();
+    let page = dir.path().join("page.html");
+    let o = kinsynth(&[
+        "view".as_ref(),
+        scenario("paper-2d").as_os_str(),
+        "--reach".as_ref(),
+        with_tree.as_os_str(),
+        "-o".as_ref(),
+        page.as_os_str(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains("tree.json: tree.parents[3] = 1000000"),
+        "{err}"
+    );
+    assert!(!page.exists());
+}

@@ -200,6 +200,17 @@ fn check_page(
             t["path"]["points"].as_array().unwrap().len()
         );
     }
+    // The planner's tree, when the page has it: a segment from every node but the root.
+    if !view["tree"].is_null() {
+        let nodes = reach["nodes"].as_u64().unwrap();
+        assert_eq!(
+            view["tree"]["nodes"].as_u64().unwrap(),
+            nodes,
+            "{}",
+            view["tree"]
+        );
+        assert_eq!(view["tree"]["edges"].as_u64().unwrap(), nodes - 1);
+    }
     // The canvas is not blank: a good share of its pixels differ from the background, in
     // several colours.
     let canvas = &result["canvas"];
@@ -253,6 +264,7 @@ fn bundled_scenarios_render_and_animate_in_chromium() {
             file.as_os_str(),
             "--json".as_ref(),
             reach.as_os_str(),
+            "--tree".as_ref(),
         ]);
         let out = run(&[
             "view".as_ref(),
@@ -268,6 +280,10 @@ fn bundled_scenarios_render_and_animate_in_chromium() {
         let reach: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(&reach).unwrap()).unwrap();
         let result = selftest(&page);
+        assert!(
+            !result["view"]["tree"].is_null(),
+            "{name}: reach --tree draws the tree"
+        );
         check_page(
             &result,
             &scenario,
@@ -313,6 +329,10 @@ fn optimize_writes_a_report_that_renders_in_chromium() {
     let links = best["design"]["links"].as_array().unwrap().len();
     check_page(&result, &scenario, &reach, links);
     let view = &result["view"];
+    assert!(
+        !view["tree"].is_null(),
+        "the report draws the planner's tree"
+    );
     assert_eq!(view["obstacles"][0]["name"], "glovebox");
     assert_eq!(view["obstacles"][0]["representation"], "trimesh");
     assert!(

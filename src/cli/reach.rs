@@ -34,6 +34,10 @@ pub struct Args {
     /// Write the report as JSON to this file (atomically).
     #[arg(long)]
     pub json: Option<PathBuf>,
+    /// Put the planner's tree (each node's end effector and parent) into the --json report,
+    /// for `kinsynth view` to draw.
+    #[arg(long)]
+    pub tree: bool,
     #[command(flatten)]
     pub urdf: UrdfReach,
 }
@@ -48,6 +52,7 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         seed,
         seeds,
         json,
+        tree,
         urdf,
     } = args;
     use rayon::prelude::*;
@@ -94,25 +99,27 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         .into_par_iter()
         .map(|k| {
             let seed = first_seed.wrapping_add(k);
-            match &body {
-                Some(body) => kinsynth::planning::reach::reachability_of(
+            let body = body.clone().unwrap_or_else(|| {
+                std::sync::Arc::new(kinsynth::collision::RobotBody::new(
                     &chain,
-                    body.clone(),
-                    &scene,
-                    &s.workspace.tasks,
-                    &planner,
-                    seed,
-                    stream,
-                ),
-                None => kinsynth::planning::reachability(
-                    &chain,
-                    &scene,
-                    &s.workspace.tasks,
-                    &planner,
-                    seed,
-                    stream,
-                ),
-            }
+                    Vec::new(),
+                    &planner.self_collision,
+                ))
+            });
+            let plan = if tree && k == 0 {
+                kinsynth::planning::reach::reachability_with_tree
+            } else {
+                kinsynth::planning::reach::reachability_of
+            };
+            plan(
+                &chain,
+                body,
+                &scene,
+                &s.workspace.tasks,
+                &planner,
+                seed,
+                stream,
+            )
         })
         .collect();
     let elapsed = start.elapsed();

@@ -251,6 +251,7 @@ mod tests {
             path,
         };
         let report = ReachReport {
+            tree: None,
             reachability: 0.5,
             checker: "segment".into(),
             l_max: 1.0,

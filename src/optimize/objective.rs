@@ -158,6 +158,27 @@ impl Objective {
         (report, b)
     }
 
+    /// As [`Objective::plan_once`]'s report, with the planner's tree kept for drawing
+    /// ([`crate::planning::reach::reachability_with_tree`]).
+    pub fn plan_with_tree(&self, x: &[f64], stream: u64, progress: f64) -> ReachReport {
+        let chain = self.space.decode(x).chain();
+        let planner = self.planner_at(progress);
+        let body = Arc::new(crate::collision::RobotBody::new(
+            &chain,
+            Vec::new(),
+            &planner.self_collision,
+        ));
+        crate::planning::reach::reachability_with_tree(
+            &chain,
+            body,
+            &self.scene,
+            &self.tasks,
+            &planner,
+            self.seed,
+            stream,
+        )
+    }
+
     /// Evaluates `x` as the optimisers do: one planner run on `stream`, and when it reaches
     /// every task, the confirmation runs; the first of them that falls short sets `R`.
     pub fn evaluate_confirmed(&self, x: &[f64], stream: u64, progress: f64) -> Evaluation {

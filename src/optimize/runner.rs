@@ -780,7 +780,10 @@ impl<'a> Runner<'a> {
             islands: c.islands,
             recheck_s,
         };
-        self.write_results(&summary, &report, c.history)?;
+        // The report page also draws the planner's tree: the same plan, its tree kept.
+        let drawn = objective.plan_with_tree(&best.x, evaluation.stream, best.progress);
+        debug_assert_eq!(drawn.targets, report.targets);
+        self.write_results(&summary, &report, &drawn, c.history)?;
         Ok(summary)
     }
 
@@ -927,6 +930,7 @@ impl<'a> Runner<'a> {
         &self,
         summary: &RunSummary,
         report: &ReachReport,
+        drawn: &ReachReport,
         history: &[HistoryRow],
     ) -> Result<()> {
         let best = serde_json::to_string_pretty(summary).expect("a summary serialises");
@@ -968,7 +972,7 @@ impl<'a> Runner<'a> {
             body: &body,
             joint_names: None,
             design: Some(&summary.design),
-            report: Some(report),
+            report: Some(drawn),
             run: Some(crate::export::view::RunView {
                 summary,
                 history,

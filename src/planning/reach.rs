@@ -65,6 +65,19 @@ pub struct ReachReport {
     pub home_blocked: Option<String>,
     /// One entry per task, in scenario order.
     pub targets: Vec<TargetReport>,
+    /// The planner's tree, when asked for ([`reachability_with_tree`], `reach --tree`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tree: Option<TreeReport>,
+}
+
+/// The planner's tree as its nodes' end effectors and parents, for drawing the search.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TreeReport {
+    /// End effector of each node, in the order the nodes were added (grafted backward trees
+    /// after the nodes of the tree from home).
+    pub end_effectors: Vec<[f64; 3]>,
+    /// Parent of each node (the root, node 0, is its own parent).
+    pub parents: Vec<u32>,
 }
 
 impl ReachReport {
@@ -154,6 +167,32 @@ pub fn reachability_of(
     seed: u64,
     stream: u64,
 ) -> ReachReport {
+    plan(chain, body, scene, tasks, config, (seed, stream), false)
+}
+
+/// As [`reachability_of`], with the planner's tree in [`ReachReport::tree`]. Everything else
+/// in the report is the same as [`reachability_of`]'s for the same arguments.
+pub fn reachability_with_tree(
+    chain: &Chain,
+    body: Arc<RobotBody>,
+    scene: &Arc<CollisionScene>,
+    tasks: &[Point3<f64>],
+    config: &PlannerConfig,
+    seed: u64,
+    stream: u64,
+) -> ReachReport {
+    plan(chain, body, scene, tasks, config, (seed, stream), true)
+}
+
+fn plan(
+    chain: &Chain,
+    body: Arc<RobotBody>,
+    scene: &Arc<CollisionScene>,
+    tasks: &[Point3<f64>],
+    config: &PlannerConfig,
+    (seed, stream): (u64, u64),
+    keep_tree: bool,
+) -> ReachReport {
     let checker = make_checker(config.checker, scene.clone(), config.body);
     let mut scratch = Scratch::with_body(chain, body.clone());
     let mut rng = planner_rng(seed, stream);
@@ -208,5 +247,14 @@ pub fn reachability_of(
             .home_blocked
             .then(|| home_collision(scene, chain, &body)),
         targets,
+        tree: keep_tree.then(|| TreeReport {
+            end_effectors: (0..tree.len() as u32)
+                .map(|n| {
+                    let e = tree.end_effector(n);
+                    [e.x, e.y, e.z]
+                })
+                .collect(),
+            parents: (0..tree.len() as u32).map(|n| tree.parent(n)).collect(),
+        }),
     }
 }

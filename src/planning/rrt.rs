@@ -79,6 +79,11 @@ impl Tree {
         offset
     }
 
+    /// Parent of node `i` (the root is its own parent).
+    pub fn parent(&self, i: u32) -> u32 {
+        self.parent[i as usize]
+    }
+
     /// Number of nodes.
     pub fn len(&self) -> usize {
         self.parent.len()

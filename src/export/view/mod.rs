@@ -245,6 +245,9 @@ fn path_configurations(points: &[Vec<f64>]) -> Vec<Vec<f64>> {
 /// Most path points a report may carry over all its paths.
 pub const MAX_PATH_POINTS: usize = 200_000;
 
+/// Most tree nodes a report may carry for the page to draw.
+pub const MAX_TREE_NODES: usize = 1_000_000;
+
 /// Reads a reachability report (`kinsynth reach --json`, or a run's `reach.json`) to show with
 /// a robot of `dof` free axes among `tasks`, checking that it belongs to them: one target per
 /// task, at the task's point, each path point with `dof` values, all finite. Errors name the
@@ -311,6 +314,41 @@ pub fn load_reach(path: &Path, tasks: &[nalgebra::Point3<f64>], dof: usize) -> R
                     format!("must be {dof} finite joint values (the robot has {dof} joints)"),
                 ));
             }
+        }
+    }
+    if let Some(tree) = &report.tree {
+        let n = tree.end_effectors.len();
+        if n > MAX_TREE_NODES {
+            return Err(bad(
+                "tree.end_effectors".into(),
+                format!("{n} nodes"),
+                format!("a report may carry at most {MAX_TREE_NODES} tree nodes"),
+            ));
+        }
+        if tree.parents.len() != n {
+            return Err(bad(
+                "tree.parents".into(),
+                format!("{} entries", tree.parents.len()),
+                format!("must have one entry per node ({n})"),
+            ));
+        }
+        if let Some(j) = tree
+            .end_effectors
+            .iter()
+            .position(|e| !e.iter().all(|v| v.is_finite()))
+        {
+            return Err(bad(
+                format!("tree.end_effectors[{j}]"),
+                format!("{:?}", tree.end_effectors[j]),
+                "must be three finite coordinates".into(),
+            ));
+        }
+        if let Some(j) = tree.parents.iter().position(|&p| p as usize >= n) {
+            return Err(bad(
+                format!("tree.parents[{j}]"),
+                tree.parents[j].to_string(),
+                format!("must name a node (below {n})"),
+            ));
         }
     }
     Ok(report)
@@ -486,6 +524,24 @@ pub fn view_data(input: &ViewInput) -> Value {
             "home_blocked": r.home_blocked,
         })
     });
+    // The tree as line segments between each node's end effector and its parent's.
+    let tree = input.report.and_then(|r| r.tree.as_ref()).map(|t| {
+        let mut points: Vec<f32> = Vec::with_capacity(t.end_effectors.len() * 6);
+        for (i, &p) in t.parents.iter().enumerate() {
+            let p = p as usize;
+            if p == i || p >= t.end_effectors.len() {
+                continue;
+            }
+            for e in [t.end_effectors[p], t.end_effectors[i]] {
+                points.extend(e.iter().map(|&v| v as f32));
+            }
+        }
+        json!({
+            "nodes": t.end_effectors.len(),
+            "edges": points.len() / 6,
+            "segments": b64_f32(&points),
+        })
+    });
     json!({
         "format": "kinsynth-view 1",
         "title": input.title,
@@ -503,6 +559,7 @@ pub fn view_data(input: &ViewInput) -> Value {
             "home": b64_f32(&home),
         },
         "paths": paths,
+        "tree": tree,
         "design": design,
         "reach": reach,
         "run": run,
