@@ -48,6 +48,7 @@ fn ur5() -> Design {
         link_radius: 0.05,
         colliders_per_link: 4,
         links,
+        tool: None,
     }
 }
 

@@ -69,6 +69,7 @@ fn sliders() -> Design {
                 ..LinkDesign::default()
             },
         ],
+        tool: None,
     }
 }
 
@@ -219,6 +220,7 @@ fn folding_arm() -> Design {
                 ..LinkDesign::default()
             })
             .collect(),
+        tool: None,
     }
 }
 
@@ -300,6 +302,7 @@ fn a_design_folded_through_itself_at_home_gets_zero() {
             link(0.2, FRAC_PI_2),
             link(0.4, FRAC_PI_2),
         ],
+        tool: None,
     };
     let w = Workspace::new(Vec::new(), vec![Point3::new(0.5, 0.0, 0.0)], 0.0).unwrap();
     let scene = Arc::new(CollisionScene::new(&w));

@@ -29,6 +29,7 @@ fn sweeping_arm() -> Design {
                 ..LinkDesign::default()
             },
         ],
+        tool: None,
     }
 }
 

@@ -324,6 +324,7 @@ fn mutated_scenarios() {
         ("paper-3d.toml", 160),
         ("ur5-cell.toml", 160),
         ("glovebox.toml", 40),
+        ("drill-fixture.toml", 80),
         ("pipework.toml", 12),
     ];
     let mut m = Mutator::new(1);

@@ -30,6 +30,7 @@ fn design(links: Vec<LinkDesign>) -> Design {
         link_radius: 0.01,
         colliders_per_link: 2,
         links,
+        tool: None,
     }
 }
 

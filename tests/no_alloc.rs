@@ -92,3 +92,28 @@ fn edge_checks_do_not_allocate_once_warm() {
         }
     }
 }
+
+#[test]
+fn oriented_ik_does_not_allocate() {
+    use kinsynth::planning::ik::{dls_oriented, IkWork};
+    use kinsynth::world::TaskOrientation;
+    let s = Scenario::load(
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("examples/scenarios/drill-fixture.toml"),
+    )
+    .unwrap();
+    let chain = s.space.largest().chain();
+    assert!(chain.has_tool());
+    let mut work = IkWork::new(&chain);
+    let pose = TaskOrientation::Pose {
+        rotation: nalgebra::Rotation3::from_euler_angles(0.3, -0.2, 1.0),
+        tolerance: 0.01,
+    };
+    let before = allocations();
+    for (j, p) in s.workspace.tasks.iter().enumerate() {
+        for o in [s.workspace.orientations[j], pose] {
+            dls_oriented(&chain, chain.home(), p, &o, 0.1, 50, 1e-4, &mut work);
+        }
+    }
+    assert_eq!(allocations() - before, 0, "allocations inside dls_oriented");
+}

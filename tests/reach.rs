@@ -35,6 +35,7 @@ fn planar_arm(lengths: &[f64]) -> Design {
         link_radius: 0.02,
         colliders_per_link: 4,
         links,
+        tool: None,
     }
 }
 

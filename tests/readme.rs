@@ -26,6 +26,19 @@ fn scenario_example_is_valid() {
     assert_eq!(s.space.template().links.len(), 8);
     assert_eq!(s.workspace.obstacles.len(), 1);
     assert_eq!(s.space.template().links[0].d, 0.3);
+    // A point task, a full pose and an approach cone; a tool.
+    let o = &s.workspace.orientations;
+    assert_eq!(o.len(), 3);
+    assert!(o[0].is_free());
+    assert!(matches!(
+        o[1],
+        kinsynth::world::TaskOrientation::Pose { .. }
+    ));
+    assert!(matches!(
+        o[2],
+        kinsynth::world::TaskOrientation::Approach { .. }
+    ));
+    assert!(s.space.largest().chain().has_tool());
 }
 
 #[test]

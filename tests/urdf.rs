@@ -123,6 +123,7 @@ fn everything() -> Design {
                 ..LinkDesign::default()
             },
         ],
+        tool: None,
     }
 }
 
@@ -150,6 +151,7 @@ fn ur5() -> Design {
         link_radius: 0.05,
         colliders_per_link: 4,
         links,
+        tool: None,
     }
 }
 

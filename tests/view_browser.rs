@@ -254,7 +254,14 @@ fn check_page(
 #[test]
 fn bundled_scenarios_render_and_animate_in_chromium() {
     let dir = tempfile::tempdir().unwrap();
-    for name in ["glovebox", "paper-2d", "paper-3d", "pipework", "ur5-cell"] {
+    for name in [
+        "drill-fixture",
+        "glovebox",
+        "paper-2d",
+        "paper-3d",
+        "pipework",
+        "ur5-cell",
+    ] {
         let file = manifest(&format!("examples/scenarios/{name}.toml"));
         let scenario = Scenario::load(&file).unwrap();
         let reach = dir.path().join(format!("{name}.reach.json"));

@@ -28,7 +28,33 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
     );
     say!("  free variables  {}", s.space.dim());
     say!("  obstacles       {}", s.workspace.obstacles.len());
-    say!("  tasks           {}", s.workspace.tasks.len());
+    let oriented = |approach: bool| {
+        s.workspace
+            .orientations
+            .iter()
+            .filter(|o| match o {
+                kinsynth::world::TaskOrientation::Approach { .. } => approach,
+                kinsynth::world::TaskOrientation::Pose { .. } => !approach,
+                kinsynth::world::TaskOrientation::Free => false,
+            })
+            .count()
+    };
+    let (cones, poses) = (oriented(true), oriented(false));
+    if cones + poses == 0 {
+        say!("  tasks           {}", s.workspace.tasks.len());
+    } else {
+        say!(
+            "  tasks           {} ({poses} with an orientation, {cones} with an approach cone)",
+            s.workspace.tasks.len()
+        );
+    }
+    if let Some(t) = &largest.tool {
+        say!(
+            "  tool            position {:?}, rpy {:?} in the last frame",
+            t.position,
+            t.rpy
+        );
+    }
     say!("  clearance       {} m", s.workspace.clearance);
     say!(
         "  planner         {} checker, l_max {:.4}, {} iterations",

@@ -99,23 +99,17 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         .into_par_iter()
         .map(|k| {
             let seed = first_seed.wrapping_add(k);
-            let body = body.clone().unwrap_or_else(|| {
-                std::sync::Arc::new(kinsynth::collision::RobotBody::new(
-                    &chain,
-                    Vec::new(),
-                    &planner.self_collision,
-                ))
-            });
             let plan = if tree && k == 0 {
                 kinsynth::planning::reach::reachability_with_tree
             } else {
-                kinsynth::planning::reach::reachability_of
+                kinsynth::planning::reachability_tasks
             };
             plan(
                 &chain,
-                body,
+                body.clone(),
                 &scene,
                 &s.workspace.tasks,
+                &s.workspace.orientations,
                 &planner,
                 seed,
                 stream,
@@ -171,8 +165,13 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         say!("  {why}");
     }
     for t in &report.targets {
+        let angle = match (t.orientation_error, t.approach_error) {
+            (Some(e), _) => format!("  orientation {:.2}°", e.to_degrees()),
+            (_, Some(e)) => format!("  approach {:.2}°", e.to_degrees()),
+            _ => String::new(),
+        };
         say!(
-            "  task {:>3} {:<11} error {:.4} m  path {}",
+            "  task {:>3} {:<11} error {:.4} m{angle}  path {}",
             t.index,
             if t.reached { "reached" } else { "not reached" },
             t.error,
@@ -180,6 +179,11 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
                 .as_ref()
                 .map_or("-".to_string(), |p| format!("{} nodes", p.points.len()))
         );
+        if let Some(why) = &t.reason {
+            if report.home_blocked.is_none() {
+                say!("      {why}");
+            }
+        }
     }
     if let Some(path) = json {
         let mut v = serde_json::to_value(&report).expect("a report serialises");

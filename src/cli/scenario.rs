@@ -17,6 +17,10 @@ pub struct Args {
     /// Output file (written atomically).
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Give every task an approach cone of 15° about a random direction within 60° of the
+    /// outward direction from the base (deterministic in --seed; the points stay the same).
+    #[arg(long)]
+    pub oriented: bool,
 }
 
 /// Runs the command.
@@ -25,8 +29,12 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         preset: p,
         seed,
         output,
+        oriented,
     } = args;
-    let spec = preset::generate(p, seed);
+    let mut spec = preset::generate(p, seed);
+    if oriented {
+        preset::orient(p, &mut spec, seed);
+    }
     kinsynth::io::write_atomic(&output, preset::to_toml(p, &spec).as_bytes())?;
     say!(
         "wrote {} ({}, seed {seed}: {} obstacles, {} tasks)",

@@ -159,6 +159,10 @@ pub struct Design {
     pub colliders_per_link: usize,
     /// The links, base to tip.
     pub links: Vec<LinkDesign>,
+    /// The tool centre point (TCP) in the last link's frame `F_n`. Default (and `None`): the
+    /// identity, the TCP is `F_n`. Exported as the fixed joint `tool0_joint`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tool: Option<Placement>,
 }
 
 impl Design {
@@ -169,12 +173,22 @@ impl Design {
             .iter()
             .map(|l| Link::from_dh(&l.dh(), l.axes.0))
             .collect();
-        Chain::new(
+        let chain = Chain::new(
             self.base.isometry(),
             &links,
             self.link_radius,
             self.colliders_per_link,
-        )
+        );
+        match &self.tool {
+            Some(t) => chain.with_tool(t.isometry()),
+            None => chain,
+        }
+    }
+
+    /// The tool centre point in `F_n` as a rigid transform (the identity without a tool).
+    pub fn tool_isometry(&self) -> nalgebra::IsometryMatrix3<f64> {
+        self.tool
+            .map_or_else(nalgebra::IsometryMatrix3::identity, |t| t.isometry())
     }
 
     /// Total body length `Σ (|a_i| + |d_i|)`.
@@ -226,13 +240,16 @@ impl Design {
                 format!("must be finite, not negative and at most {MAX_LENGTH} m"),
             ));
         }
+        let tool = self.tool.unwrap_or_default();
         for (name, v, bound, unit) in [
-            ("position", self.base.position, MAX_LENGTH, "m"),
-            ("rpy", self.base.rpy, MAX_ANGLE, "rad"),
+            ("base.position", self.base.position, MAX_LENGTH, "m"),
+            ("base.rpy", self.base.rpy, MAX_ANGLE, "rad"),
+            ("tool.position", tool.position, MAX_LENGTH, "m"),
+            ("tool.rpy", tool.rpy, MAX_ANGLE, "rad"),
         ] {
             if !v.iter().all(|&c| within(c, bound)) {
                 return Err(Error::invalid(
-                    format!("base.{name}"),
+                    name.to_string(),
                     fmt_list(&v),
                     format!("every value must be finite and within ±{bound} {unit}"),
                 ));
@@ -334,6 +351,7 @@ mod tests {
                 },
                 LinkDesign::default(),
             ],
+            tool: None,
         }
     }
 

@@ -268,6 +268,7 @@ mod tests {
             link_radius: 0.02,
             colliders_per_link: 2,
             links: vec![LinkDesign::default(); 2],
+            tool: None,
         };
         let vars = vec![
             Variable {
@@ -321,6 +322,7 @@ mod tests {
             link_radius: 0.0,
             colliders_per_link: 0,
             links: vec![LinkDesign::default()],
+            tool: None,
         };
         let vars = vec![
             Variable {

@@ -91,6 +91,7 @@ mod tests {
                     ..LinkDesign::default()
                 })
                 .collect(),
+            tool: None,
         }
     }
 

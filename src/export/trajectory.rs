@@ -249,6 +249,7 @@ mod tests {
             end_effector: [0.0; 3],
             error: 0.0,
             path,
+            ..crate::planning::TargetReport::default()
         };
         let report = ReachReport {
             tree: None,

@@ -13,7 +13,8 @@
 //! - An axis with a zero-width range at a non-zero value is a constant: it folds into the origin
 //!   of the next joint of the link, or into a fixed joint `link{i}_fixed` that ends the link. A
 //!   link without any axis goes straight from `link{i}_geometry` to `link{i}`.
-//! - A fixed joint `tool0_joint` (identity) from `link{n}` to `tool0`, the end effector.
+//! - A fixed joint `tool0_joint` from `link{n}` to `tool0`, the tool centre point: its origin
+//!   is the design's tool (`[robot] tool`, the identity by default).
 //!
 //! Every link has the negligible mass [`LINK_MASS`] and inertia [`LINK_INERTIA`]·I (massless for
 //! kinematics, but valid for simulators that reject zero masses).
@@ -344,7 +345,7 @@ pub fn design_to_urdf(design: &Design, name: &str) -> urdf_rs::Robot {
         "tool0_joint".into(),
         &link_name(design.links.len()),
         TOOL_LINK,
-        &IsometryMatrix3::identity(),
+        &design.tool_isometry(),
     );
     urdf_rs::Robot {
         name: name.to_string(),
@@ -396,6 +397,7 @@ mod tests {
                 },
                 LinkDesign::default(),
             ],
+            tool: None,
         }
     }
 

@@ -17,8 +17,10 @@
 //!   prepended to the next fixed transform. A moving joint whose origin is the identity, directly
 //!   after another one, with both axes along +x, +y or +z and in the order of paper Eq. 2, joins
 //!   that joint's link instead (so a kinsynth export imports with the design's own links).
-//! - Trailing fixed joints up to the tip become a last link without axes (the tip's origin is
-//!   the end effector), unless they are the identity.
+//! - A last fixed joint whose child is the tip link `tool0` (as kinsynth exports write it) is
+//!   the chain's tool centre point ([`Chain::with_tool`]): its origin becomes the tool transform.
+//! - Other trailing fixed joints up to the tip become a last link without axes (the tip's
+//!   origin is the end effector), unless they are the identity.
 //! - Body (this chain's capsule segments, `reach --body capsules`; the default body is the
 //!   links' `<collision>` elements, see [`super::body`]): each link is the polyline from the previous frame's origin to its joint origin. When
 //!   the `<collision>` cylinders (or capsules) of the links rigidly attached to the previous
@@ -556,9 +558,22 @@ pub fn chain_from_urdf(
     // The link being built: can it take more axes (identity origin, coordinate axes)?
     let mut open: Option<(Link, Axis, bool)> = None;
     let mut started = false;
-    for j in &path {
+    let mut tool = IsometryMatrix3::identity();
+    let last = path.len().saturating_sub(1);
+    for (k, j) in path.iter().enumerate() {
         let origin = isometry_of(&j.origin);
         let child = links[j.child.link.as_str()];
+        if k == last
+            && started
+            && j.joint_type == urdf_rs::JointType::Fixed
+            && j.child.link == crate::export::urdf::TOOL_LINK
+        {
+            // The tool centre point: carried by the last frame, not a link of its own.
+            tool = origin;
+            group.push((child, pending * origin));
+            carried.push(carry(&child.name, names.len(), pending * origin));
+            continue;
+        }
         if j.joint_type == urdf_rs::JointType::Fixed {
             if !started && child.collision.is_empty() {
                 // Leading fixed joint to a link without geometry: part of the base pose.
@@ -631,7 +646,7 @@ pub fn chain_from_urdf(
         });
     }
     Ok(UrdfChain {
-        chain: Chain::new(base_pose, &chain_links, radius, colliders_per_link),
+        chain: Chain::new(base_pose, &chain_links, radius, colliders_per_link).with_tool(tool),
         joint_names: names,
         base,
         tip,

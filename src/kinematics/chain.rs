@@ -105,6 +105,9 @@ pub struct Chain {
     layout: ArcLayout,
     /// No body segments ([`Chain::without_segments`]): forward kinematics writes none.
     bare: bool,
+    /// The tool centre point in the last frame `F_n` ([`Chain::with_tool`]); `None` is the
+    /// identity (the TCP is `F_n`).
+    tool: Option<IsometryMatrix3<f64>>,
 }
 
 /// See [`Chain::arc_layout`].
@@ -130,19 +133,28 @@ pub struct Frames {
     pub frames: Vec<IsometryMatrix3<f64>>,
     /// Origin of each link's joint frame `F_{i−1}·T_i` (where its actuation applies), `n` entries.
     pub joints: Vec<Point3<f64>>,
-    /// `f(a)` of paper Eq. 10: the origins of `F_1 … F_n` (the last one is the end effector).
+    /// `f(a)` of paper Eq. 10: the origins of `F_1 … F_n`, then the tool centre point when the
+    /// chain has a tool ([`Chain::with_tool`]); see [`Chain::position_count`].
     pub positions: Vec<Point3<f64>>,
     /// Body segments of all links in world coordinates; see [`Chain::link_segments`].
     pub segments: Vec<[Point3<f64>; 2]>,
     /// The frame right after each free axis (actuation-vector order): the pose of that joint's
     /// child link, which carries the bodies attached there.
     pub axis_frames: Vec<IsometryMatrix3<f64>>,
+    /// The tool centre point frame `F_n · T_tool` (`F_n` itself without a tool).
+    pub tcp: IsometryMatrix3<f64>,
 }
 
 impl Frames {
-    /// The end-effector position: the origin of the last frame.
+    /// The end-effector position: the tool centre point (the origin of the last frame when
+    /// the chain has no tool).
     pub fn end_effector(&self) -> Point3<f64> {
-        Point3::from(self.frames[self.frames.len() - 1].translation.vector)
+        Point3::from(self.tcp.translation.vector)
+    }
+
+    /// The rotation of the tool centre point frame in the world.
+    pub fn tcp_rotation(&self) -> &Matrix3<f64> {
+        self.tcp.rotation.matrix()
     }
 
     /// `f(a)` flattened: `3n` coordinates of all joint positions (paper Eq. 10).
@@ -359,7 +371,34 @@ impl Chain {
             axis_frames,
             layout,
             bare: false,
+            tool: None,
         }
+    }
+
+    /// The same chain with a tool: the tool centre point (TCP) is `tool` in the last frame
+    /// `F_n`. Position and orientation errors, the Jacobians and the step metric of paper
+    /// Eq. 10 then use the TCP ([`Frames::tcp`], the last entry of [`Frames::positions`]);
+    /// [`Chain::reach_bound`] adds the tool's offset. The identity removes the tool, so a chain
+    /// with an identity tool is exactly the chain without one.
+    pub fn with_tool(mut self, tool: IsometryMatrix3<f64>) -> Self {
+        self.tool = (tool != IsometryMatrix3::identity()).then_some(tool);
+        self
+    }
+
+    /// The tool centre point in the last frame `F_n` (the identity without a tool).
+    pub fn tool(&self) -> IsometryMatrix3<f64> {
+        self.tool.unwrap_or_else(IsometryMatrix3::identity)
+    }
+
+    /// True when the chain has a (non-identity) tool.
+    pub fn has_tool(&self) -> bool {
+        self.tool.is_some()
+    }
+
+    /// Number of points in [`Frames::positions`]: the `n` frame origins, plus the TCP when the
+    /// chain has a tool.
+    pub fn position_count(&self) -> usize {
+        self.links.len() + usize::from(self.tool.is_some())
     }
 
     /// The same kinematics without body segments, for a robot whose body is made of solids
@@ -441,13 +480,14 @@ impl Chain {
         &self.home
     }
 
-    /// An upper bound on the distance of the end effector from the base origin over every
-    /// configuration within the ranges: the sum of the fixed translations (DH `d`, `a` and
-    /// constant prismatic offsets) and of each free prismatic axis's largest travel. Rotations
-    /// keep lengths, so `‖p_ee(a) − p_0‖ ≤ reach_bound()` for every `a` (triangle inequality
-    /// along the chain); a task farther than this plus the goal tolerance cannot be reached.
+    /// An upper bound on the distance of the end effector (the TCP) from the base origin over
+    /// every configuration within the ranges: the sum of the fixed translations (DH `d`, `a`,
+    /// constant prismatic offsets and the tool's offset) and of each free prismatic axis's
+    /// largest travel. Rotations keep lengths, so `‖p_ee(a) − p_0‖ ≤ reach_bound()` for every
+    /// `a` (triangle inequality along the chain); a task farther than this plus the goal
+    /// tolerance cannot be reached.
     pub fn reach_bound(&self) -> f64 {
-        let mut r = 0.0;
+        let mut r = self.tool.map_or(0.0, |t| t.translation.vector.norm());
         for link in &self.links {
             r += link.transform.translation.vector.norm();
             for op in &self.ops[link.ops.clone()] {
@@ -514,9 +554,10 @@ impl Chain {
         Frames {
             frames: vec![self.base; n + 1],
             joints: vec![Point3::origin(); n],
-            positions: vec![Point3::origin(); n],
+            positions: vec![Point3::origin(); self.position_count()],
             segments: vec![[Point3::origin(); 2]; self.segment_count],
             axis_frames: vec![self.base; self.free.len()],
+            tcp: self.base,
         }
     }
 
@@ -599,10 +640,18 @@ impl Chain {
             // `rot` is a product of rotations, so it stays orthonormal.
             *f.rotation.matrix_mut_unchecked() = rot;
         }
+        let n = self.links.len();
+        match &self.tool {
+            None => out.tcp = out.frames[n],
+            Some(t) => {
+                out.tcp = out.frames[n] * t;
+                out.positions[n] = Point3::from(out.tcp.translation.vector);
+            }
+        }
     }
 
-    /// The position Jacobian of the end effector, `∂p_ee/∂a` (3 × dof, column-major: column `k`
-    /// at `out[3k..3k+3]`), at the configuration whose frames are in `frames` (from
+    /// The position Jacobian of the end effector (the TCP), `∂p_ee/∂a` (3 × dof, column-major:
+    /// column `k` at `out[3k..3k+3]`), at the configuration whose frames are in `frames` (from
     /// [`Chain::fk`] with the same `a`). For a rotation axis the column is `ω̂ × (p_ee − o)`
     /// with `ω̂` the axis direction after the link's earlier rotations and `o` the joint origin;
     /// for a translation axis it is the axis direction. Allocation-free.
@@ -634,6 +683,34 @@ impl Chain {
             }
             // The next link starts from F_i, whose rotation is `rot` (translations do not
             // rotate); re-sync with the stored frame to avoid drift.
+            rot = *frames.frames[i + 1].rotation.matrix();
+        }
+    }
+
+    /// The angular Jacobian of the tool frame (3 × dof, column-major as [`Chain::jacobian`]):
+    /// the world angular velocity per unit of each free axis, `ω̂` for a rotation axis and zero
+    /// for a translation axis, at the configuration whose frames are in `frames` (from
+    /// [`Chain::fk`] with the same `a`). Allocation-free.
+    pub fn angular_jacobian(&self, a: &[f64], frames: &Frames, out: &mut [f64]) {
+        debug_assert_eq!(out.len(), 3 * self.free.len());
+        let mut rot: Matrix3<f64> = *self.base.rotation.matrix();
+        for (i, link) in self.links.iter().enumerate() {
+            if !link.identity_rotation {
+                rot *= link.transform.rotation.matrix();
+            }
+            for op in &self.ops[link.ops.clone()] {
+                match *op {
+                    Op::RotConst { axis, s, c } => rotate_local(&mut rot, axis, s, c),
+                    Op::RotFree { axis, k } => {
+                        let w = rot.column(axis.index()).into_owned();
+                        out[3 * k..3 * k + 3].copy_from_slice(w.as_slice());
+                        let (s, c) = libm::sincos(a[k]);
+                        rotate_local(&mut rot, axis, s, c);
+                    }
+                    Op::TransConst { .. } => {}
+                    Op::TransFree { k, .. } => out[3 * k..3 * k + 3].fill(0.0),
+                }
+            }
             rot = *frames.frames[i + 1].rotation.matrix();
         }
     }

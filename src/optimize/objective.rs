@@ -4,7 +4,7 @@
 use super::Problem;
 use crate::collision::CollisionScene;
 use crate::design::{Design, DesignSpace};
-use crate::planning::{reachability, PlannerConfig, ReachReport};
+use crate::planning::{PlannerConfig, ReachReport};
 use crate::scenario::{ObjectiveWeights, Scenario};
 use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
@@ -98,6 +98,7 @@ pub struct Objective {
     space: DesignSpace,
     scene: Arc<CollisionScene>,
     tasks: Vec<Point3<f64>>,
+    orientations: Vec<crate::world::TaskOrientation>,
     planner: PlannerConfig,
     weights: ObjectiveWeights,
     seed: u64,
@@ -116,6 +117,7 @@ impl Objective {
             space: scenario.space.clone(),
             scene: Arc::new(CollisionScene::new(&scenario.workspace)),
             tasks: scenario.workspace.tasks.clone(),
+            orientations: scenario.workspace.orientations.clone(),
             planner,
             weights: scenario.objective.clone(),
             seed,
@@ -146,10 +148,12 @@ impl Objective {
     pub fn plan_once(&self, x: &[f64], stream: u64, progress: f64) -> (ReachReport, Breakdown) {
         let design = self.space.decode(x);
         let chain = design.chain();
-        let report = reachability(
+        let report = crate::planning::reachability_tasks(
             &chain,
+            None,
             &self.scene,
             &self.tasks,
+            &self.orientations,
             &self.planner_at(progress),
             self.seed,
             stream,
@@ -163,16 +167,12 @@ impl Objective {
     pub fn plan_with_tree(&self, x: &[f64], stream: u64, progress: f64) -> ReachReport {
         let chain = self.space.decode(x).chain();
         let planner = self.planner_at(progress);
-        let body = Arc::new(crate::collision::RobotBody::new(
-            &chain,
-            Vec::new(),
-            &planner.self_collision,
-        ));
         crate::planning::reach::reachability_with_tree(
             &chain,
-            body,
+            None,
             &self.scene,
             &self.tasks,
+            &self.orientations,
             &planner,
             self.seed,
             stream,
@@ -272,6 +272,7 @@ mod tests {
                     ..LinkDesign::default()
                 },
             ],
+            tool: None,
         }
     }
 

@@ -22,6 +22,12 @@ pub struct PlannerConfig {
     pub lambda: f64,
     /// Distance (metres) at which the end effector counts as on a task point. Default 0.02.
     pub goal_tolerance: f64,
+    /// Metres per radian between position and orientation errors in the inverse kinematics of
+    /// oriented tasks ([`crate::planning::ik::dls_oriented`]): the stacked error is
+    /// `[Δp; w·Δθ]`. Default [`DEFAULT_ORIENTATION_WEIGHT`] (1 rad counts as 0.1 m). Unused by
+    /// point tasks.
+    #[serde(skip_serializing_if = "is_default_orientation_weight")]
+    pub orientation_weight: f64,
     /// RRT iterations per design: the budget of a run, unless it grows (see `budget_growth`).
     /// Default 2000.
     pub max_iterations: usize,
@@ -49,6 +55,13 @@ pub struct PlannerConfig {
     /// Self-collision settings, from the scenario's `[robot]` section (not a `[planner]` key).
     #[serde(skip)]
     pub self_collision: SelfCollisionConfig,
+}
+
+/// Default [`PlannerConfig::orientation_weight`] (metres per radian).
+pub const DEFAULT_ORIENTATION_WEIGHT: f64 = 0.1;
+
+fn is_default_orientation_weight(w: &f64) -> bool {
+    *w == DEFAULT_ORIENTATION_WEIGHT
 }
 
 impl PlannerConfig {
@@ -84,6 +97,13 @@ impl PlannerConfig {
                 "goal_tolerance",
                 &crate::error::Num(self.goal_tolerance),
                 format!("must be positive and at most {MAX_LENGTH} m"),
+            );
+        }
+        if !(self.orientation_weight > 0.0 && within(self.orientation_weight, MAX_SETTING)) {
+            return bad(
+                "orientation_weight",
+                &crate::error::Num(self.orientation_weight),
+                format!("must be positive and at most {MAX_SETTING} (metres per radian)"),
             );
         }
         if !(1..=MAX_ITERATIONS).contains(&self.max_iterations) {
@@ -141,6 +161,7 @@ impl Default for PlannerConfig {
             l_max: std::f64::consts::FRAC_PI_4,
             lambda: 0.1,
             goal_tolerance: 0.02,
+            orientation_weight: DEFAULT_ORIENTATION_WEIGHT,
             max_iterations: 2000,
             goal_bias: 0.2,
             time_limit: None,

@@ -3,11 +3,12 @@
 //! iteration schedules (§V).
 
 pub mod config;
+pub mod feasible;
 pub mod ik;
 pub mod reach;
 pub mod rrt;
 pub mod schedule;
 
 pub use config::PlannerConfig;
-pub use reach::{reachability, PathReport, ReachReport, TargetReport};
+pub use reach::{reachability, reachability_tasks, PathReport, ReachReport, TargetReport};
 pub use schedule::Schedule;

@@ -5,6 +5,7 @@ use super::rrt::Rrt;
 use super::PlannerConfig;
 use crate::collision::{make_checker, CollisionScene, RobotBody, Scratch};
 use crate::kinematics::Chain;
+use crate::world::TaskOrientation;
 use nalgebra::Point3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -21,7 +22,7 @@ pub struct PathReport {
 }
 
 /// The outcome for one task point.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct TargetReport {
     /// Index of the task in the scenario.
     pub index: usize,
@@ -29,10 +30,31 @@ pub struct TargetReport {
     pub point: [f64; 3],
     /// True when a node within the goal tolerance was reached.
     pub reached: bool,
-    /// End effector of the reaching node, or of the tree's closest node when unreached.
+    /// End effector (the tool centre point) of the reaching node, or of the tree's closest
+    /// node when unreached.
     pub end_effector: [f64; 3],
     /// Distance between `end_effector` and `point`.
     pub error: f64,
+    /// The same distance under the name the oriented reports use (metres).
+    #[serde(default)]
+    pub position_error: f64,
+    /// For a task with a full orientation: the rotation angle (radians) between the TCP frame
+    /// of that node and the task's orientation.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub orientation_error: Option<f64>,
+    /// For a task with an approach cone: the angle (radians) between the TCP's z axis at that
+    /// node and the approach direction.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub approach_error: Option<f64>,
+    /// The orientation or approach tolerance (radians) of the task, when it has one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub orientation_tolerance: Option<f64>,
+    /// The TCP rotation of that node, row by row (a task with an orientation or approach).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tool_rotation: Option<[[f64; 3]; 3]>,
+    /// Why the task is unreached (absent when reached).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reason: Option<String>,
     /// The path from home, when reached.
     pub path: Option<PathReport>,
 }
@@ -152,8 +174,7 @@ pub fn reachability(
     seed: u64,
     stream: u64,
 ) -> ReachReport {
-    let body = Arc::new(RobotBody::new(chain, Vec::new(), &config.self_collision));
-    reachability_of(chain, body, scene, tasks, config, seed, stream)
+    reachability_tasks(chain, None, scene, tasks, &[], config, seed, stream)
 }
 
 /// As [`reachability`], for a given robot body of `chain` (for example an imported arm's
@@ -167,32 +188,71 @@ pub fn reachability_of(
     seed: u64,
     stream: u64,
 ) -> ReachReport {
-    plan(chain, body, scene, tasks, config, (seed, stream), false)
+    reachability_tasks(chain, Some(body), scene, tasks, &[], config, seed, stream)
 }
 
-/// As [`reachability_of`], with the planner's tree in [`ReachReport::tree`]. Everything else
-/// in the report is the same as [`reachability_of`]'s for the same arguments.
-pub fn reachability_with_tree(
+/// As [`reachability`], for tasks with orientation constraints (`orientations` one per task, or
+/// empty for point tasks; see [`Rrt::with_orientations`]) and an optional robot body (default:
+/// the chain's capsules). Each task's report gives its position error and, for an oriented
+/// task, its orientation or approach error at the reaching node (or at the tree's node nearest
+/// to the point when unreached), and for an unreached task the reason.
+#[allow(clippy::too_many_arguments)]
+pub fn reachability_tasks(
     chain: &Chain,
-    body: Arc<RobotBody>,
+    body: Option<Arc<RobotBody>>,
     scene: &Arc<CollisionScene>,
     tasks: &[Point3<f64>],
+    orientations: &[TaskOrientation],
     config: &PlannerConfig,
     seed: u64,
     stream: u64,
 ) -> ReachReport {
-    plan(chain, body, scene, tasks, config, (seed, stream), true)
+    plan(
+        chain,
+        body,
+        scene,
+        (tasks, orientations),
+        config,
+        (seed, stream),
+        false,
+    )
+}
+
+/// As [`reachability_tasks`], with the planner's tree in [`ReachReport::tree`]. Everything else
+/// in the report is the same as [`reachability_tasks`]'s for the same arguments.
+#[allow(clippy::too_many_arguments)]
+pub fn reachability_with_tree(
+    chain: &Chain,
+    body: Option<Arc<RobotBody>>,
+    scene: &Arc<CollisionScene>,
+    tasks: &[Point3<f64>],
+    orientations: &[TaskOrientation],
+    config: &PlannerConfig,
+    seed: u64,
+    stream: u64,
+) -> ReachReport {
+    plan(
+        chain,
+        body,
+        scene,
+        (tasks, orientations),
+        config,
+        (seed, stream),
+        true,
+    )
 }
 
 fn plan(
     chain: &Chain,
-    body: Arc<RobotBody>,
+    body: Option<Arc<RobotBody>>,
     scene: &Arc<CollisionScene>,
-    tasks: &[Point3<f64>],
+    (tasks, orientations): (&[Point3<f64>], &[TaskOrientation]),
     config: &PlannerConfig,
     (seed, stream): (u64, u64),
     keep_tree: bool,
 ) -> ReachReport {
+    let body =
+        body.unwrap_or_else(|| Arc::new(RobotBody::new(chain, Vec::new(), &config.self_collision)));
     let checker = make_checker(config.checker, scene.clone(), config.body);
     let mut scratch = Scratch::with_body(chain, body.clone());
     let mut rng = planner_rng(seed, stream);
@@ -200,27 +260,72 @@ fn plan(
     let growth = if folded {
         super::rrt::Growth::blocked(chain, tasks.len())
     } else {
-        Rrt::new(chain, checker.as_ref(), config, tasks).grow(&mut rng, &mut scratch)
+        Rrt::new(chain, checker.as_ref(), config, tasks)
+            .with_orientations(orientations)
+            .grow(&mut rng, &mut scratch)
     };
     let names = chain.joint_names();
     let tree = &growth.tree;
+    let mut home_frames = chain.frames();
+    chain.fk(chain.home(), &mut home_frames);
+    let origin = Point3::from(chain.base().translation.vector);
+    let bound = chain.reach_bound();
     let targets: Vec<TargetReport> = tasks
         .iter()
         .enumerate()
         .map(|(index, p)| {
             let node = growth.reached[index]
                 .or_else(|| (!tree.is_empty()).then(|| tree.nearest_end_effector(p)));
-            let ee = node.map_or_else(
-                || chain.end_effector(chain.home()),
-                |n| tree.end_effector(n),
-            );
+            let ee = node.map_or_else(|| home_frames.end_effector(), |n| tree.end_effector(n));
+            let rot = node.map_or(*home_frames.tcp_rotation(), |n| *tree.tcp_rotation(n));
             let reached = growth.reached[index].is_some();
+            let o = orientations.get(index).copied().unwrap_or_default();
+            let error = (ee - p).norm();
+            let angle = (!o.is_free()).then(|| o.error(&rot));
+            let reason = (!reached).then(|| {
+                let far = (p - origin).norm();
+                if growth.home_blocked {
+                    "the home pose is blocked".to_string()
+                } else if far > bound + config.goal_tolerance {
+                    format!(
+                        "the point is {far:.4} m from the base, beyond the design's reach bound of {bound:.4} m plus the goal tolerance"
+                    )
+                } else if let Some(why) = super::feasible::impossible_orientation(chain, &o) {
+                    why
+                } else if o.is_free() {
+                    format!(
+                        "no collision-free path brought the tool within {} m of the point in {} iterations (closest {error:.4} m)",
+                        config.goal_tolerance, growth.iterations
+                    )
+                } else {
+                    format!(
+                        "no collision-free path brought the tool within {} m of the point and {:.1}° of the task's {} in {} iterations (closest node: {error:.4} m, {:.1}°)",
+                        config.goal_tolerance,
+                        o.tolerance().to_degrees(),
+                        match o {
+                            TaskOrientation::Approach { .. } => "approach direction",
+                            _ => "orientation",
+                        },
+                        growth.iterations,
+                        angle.unwrap_or(0.0).to_degrees()
+                    )
+                }
+            });
             TargetReport {
                 index,
                 point: [p.x, p.y, p.z],
                 reached,
                 end_effector: [ee.x, ee.y, ee.z],
-                error: (ee - p).norm(),
+                error,
+                position_error: error,
+                orientation_error: angle.filter(|_| matches!(o, TaskOrientation::Pose { .. })),
+                approach_error: angle
+                    .filter(|_| matches!(o, TaskOrientation::Approach { .. })),
+                orientation_tolerance: (!o.is_free()).then(|| o.tolerance()),
+                tool_rotation: (!o.is_free()).then(|| {
+                    [0, 1, 2].map(|i| [rot[(i, 0)], rot[(i, 1)], rot[(i, 2)]])
+                }),
+                reason,
                 path: growth.reached[index].map(|n| PathReport {
                     joint_names: names.clone(),
                     points: tree.path_to(n),

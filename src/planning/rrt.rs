@@ -2,12 +2,13 @@
 //! tree (paper §II-D, Eq. 10; the planner of §III), helped by backward trees grown from
 //! collision-free inverse-kinematics postures of the tasks it has not reached yet.
 
-use super::ik::{dls, IkWork};
+use super::ik::{dls_oriented, IkWork};
 use super::PlannerConfig;
 use crate::collision::{EdgeChecker, Scratch};
 use crate::kinematics::{Chain, Frames};
 use crate::limits::MAX_ITERATIONS;
-use nalgebra::Point3;
+use crate::world::TaskOrientation;
+use nalgebra::{Matrix3, Point3};
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 use std::collections::HashSet;
@@ -17,8 +18,9 @@ use std::time::Instant;
 /// other tree when a forward and a backward tree try to join.
 pub const CONNECT_STEPS: usize = 25;
 
-/// The tree: configurations, their joint positions `f(a)` and end effectors, and parents (the
-/// root is its own parent; a grafted branch can have parents of higher index than itself).
+/// The tree: configurations, their joint positions `f(a)`, end effectors (TCP positions) and TCP
+/// rotations, and parents (the root is its own parent; a grafted branch can have parents of
+/// higher index than itself).
 #[derive(Clone, Debug)]
 pub struct Tree {
     dof: usize,
@@ -26,6 +28,7 @@ pub struct Tree {
     configs: Vec<f64>,
     positions: Vec<Point3<f64>>,
     ee: Vec<Point3<f64>>,
+    rot: Vec<Matrix3<f64>>,
     parent: Vec<u32>,
 }
 
@@ -33,10 +36,11 @@ impl Tree {
     fn new(chain: &Chain) -> Self {
         Tree {
             dof: chain.dof(),
-            links: chain.link_count(),
+            links: chain.position_count(),
             configs: Vec::new(),
             positions: Vec::new(),
             ee: Vec::new(),
+            rot: Vec::new(),
             parent: Vec::new(),
         }
     }
@@ -45,6 +49,7 @@ impl Tree {
         self.configs.extend_from_slice(q);
         self.positions.extend_from_slice(&frames.positions);
         self.ee.push(frames.end_effector());
+        self.rot.push(*frames.tcp_rotation());
         self.parent.push(parent);
         (self.parent.len() - 1) as u32
     }
@@ -54,6 +59,7 @@ impl Tree {
         self.configs.clear();
         self.positions.clear();
         self.ee.clear();
+        self.rot.clear();
         self.parent.clear();
     }
 
@@ -65,6 +71,7 @@ impl Tree {
         self.configs.extend_from_slice(&other.configs);
         self.positions.extend_from_slice(&other.positions);
         self.ee.extend_from_slice(&other.ee);
+        self.rot.extend_from_slice(&other.rot);
         self.parent.extend(other.parent.iter().map(|&p| p + offset));
         let (mut child, mut new_parent) = (at, onto);
         loop {
@@ -106,9 +113,14 @@ impl Tree {
         &self.positions[i * self.links..(i + 1) * self.links]
     }
 
-    /// End effector of node `i`.
+    /// End effector (TCP position) of node `i`.
     pub fn end_effector(&self, i: u32) -> Point3<f64> {
         self.ee[i as usize]
+    }
+
+    /// Rotation of the TCP frame of node `i` in the world.
+    pub fn tcp_rotation(&self, i: u32) -> &Matrix3<f64> {
+        &self.rot[i as usize]
     }
 
     /// The configurations from the root (home) to node `i`, in order.
@@ -275,6 +287,8 @@ pub struct Rrt<'a> {
     checker: &'a dyn EdgeChecker,
     config: &'a PlannerConfig,
     tasks: &'a [Point3<f64>],
+    /// One per task, or empty: every task is a point task.
+    orientations: &'a [TaskOrientation],
 }
 
 impl<'a> Rrt<'a> {
@@ -291,7 +305,30 @@ impl<'a> Rrt<'a> {
             checker,
             config,
             tasks,
+            orientations: &[],
         }
+    }
+
+    /// The same planner with an orientation constraint per task (`orientations` has one entry
+    /// per task, or none: point tasks). A task then counts as reached when the TCP is within
+    /// the goal tolerance of its point and the TCP rotation satisfies its constraint, and the
+    /// IK goals take the constraint into account ([`dls_oriented`], with
+    /// `config.orientation_weight`).
+    ///
+    /// # Panics
+    /// When `orientations` is neither empty nor one per task.
+    pub fn with_orientations(mut self, orientations: &'a [TaskOrientation]) -> Self {
+        assert!(
+            orientations.is_empty() || orientations.len() == self.tasks.len(),
+            "one orientation per task"
+        );
+        self.orientations = orientations;
+        self
+    }
+
+    /// The orientation constraint of task `j`.
+    fn orientation(&self, j: usize) -> TaskOrientation {
+        self.orientations.get(j).copied().unwrap_or_default()
     }
 
     /// Steers from node `near` toward `target`, cutting the step until the metric of paper
@@ -364,13 +401,16 @@ impl<'a> Rrt<'a> {
         Step::Added(tree.push(&work.q_new, &work.frames, near))
     }
 
-    /// Marks the tasks within tolerance of node `node`'s end effector as reached by it; true
-    /// when there was one.
+    /// Marks the tasks within tolerance of node `node`'s end effector, and whose orientation
+    /// constraint its TCP rotation satisfies, as reached by it; true when there was one.
     fn mark_reached(&self, tree: &Tree, node: u32, reached: &mut [Option<u32>]) -> bool {
         let ee = tree.end_effector(node);
         let mut any = false;
-        for (r, t) in reached.iter_mut().zip(self.tasks) {
-            if r.is_none() && self.within_tolerance(&ee, t) {
+        for (j, (r, t)) in reached.iter_mut().zip(self.tasks).enumerate() {
+            if r.is_none()
+                && self.within_tolerance(&ee, t)
+                && self.orientation(j).holds(tree.tcp_rotation(node))
+            {
                 debug_assert!(
                     (t - self.chain.base().translation.vector).coords.norm()
                         <= self.chain.reach_bound() + self.config.goal_tolerance + 1e-9,
@@ -460,10 +500,13 @@ impl<'a> Rrt<'a> {
         } else {
             s.tree.config(node)
         };
-        dls(
+        let orientation = self.orientation(j);
+        dls_oriented(
             chain,
             ik_start,
             &target,
+            &orientation,
+            self.config.orientation_weight,
             self.config.ik_steps,
             0.25 * self.config.goal_tolerance,
             &mut work.ik,
@@ -474,6 +517,7 @@ impl<'a> Rrt<'a> {
         if restart {
             chain.fk(&goal, &mut work.frames);
             if !self.within_tolerance(&work.frames.end_effector(), &target)
+                || !orientation.holds(work.frames.tcp_rotation())
                 || !self.checker.node_free(chain, &goal, scratch)
             {
                 work.q_goal = goal;
@@ -559,13 +603,19 @@ impl<'a> Rrt<'a> {
     }
 
     /// For each task, whether it lies farther from the base origin than
-    /// [`Chain::reach_bound`] plus the goal tolerance: no configuration reaches it.
+    /// [`Chain::reach_bound`] plus the goal tolerance, or asks for an orientation the chain can
+    /// never take ([`super::feasible::impossible_orientation`]): no configuration reaches it.
     fn beyond_reach(&self) -> Vec<bool> {
         let origin = Point3::from(self.chain.base().translation.vector);
         let limit = self.chain.reach_bound() + self.config.goal_tolerance;
         self.tasks
             .iter()
-            .map(|t| (t - origin).norm() > limit * (1.0 + 1e-12) + 1e-12)
+            .enumerate()
+            .map(|(j, t)| {
+                (t - origin).norm() > limit * (1.0 + 1e-12) + 1e-12
+                    || super::feasible::impossible_orientation(self.chain, &self.orientation(j))
+                        .is_some()
+            })
             .collect()
     }
 

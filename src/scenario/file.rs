@@ -156,6 +156,9 @@ pub struct RobotSpec {
     /// Base placement. Default: the origin.
     #[serde(default)]
     pub base: Placement,
+    /// The tool centre point in the last link's frame. Default: the identity.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tool: Option<Placement>,
     /// Template for every link.
     #[serde(default)]
     pub uniform: LinkSpec,
@@ -277,9 +280,49 @@ pub struct TaskSpec {
     /// Optional name.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub name: Option<String>,
-    /// The point the end effector must reach.
+    /// The point the tool centre point must reach.
     #[serde(deserialize_with = "crate::limits::exact::array")]
     pub point: [f64; 3],
+    /// A full orientation of the TCP frame (`rpy` or `quaternion`), with
+    /// `orientation_tolerance`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub orientation: Option<OrientationSpec>,
+    /// Largest rotation angle (radians, in `[0, π]`) between the TCP frame and `orientation`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub orientation_tolerance: Option<f64>,
+    /// The direction the tool's z axis must point along (non-zero; normalised), with
+    /// `approach_tolerance`; rotation about it is free.
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "crate::limits::exact::option"
+    )]
+    pub approach: Option<[f64; 3]>,
+    /// Half-angle (radians, in `[0, π]`) of the cone about `approach` the tool's z axis must
+    /// lie in.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub approach_tolerance: Option<f64>,
+}
+
+/// A task's orientation: roll, pitch, yaw (fixed axes, as URDF) or a unit quaternion
+/// `[x, y, z, w]` (ROS order).
+#[derive(Clone, Copy, Debug, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OrientationSpec {
+    /// Roll, pitch, yaw (radians).
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "crate::limits::exact::option"
+    )]
+    pub rpy: Option<[f64; 3]>,
+    /// A unit quaternion `[x, y, z, w]` (norm within 1e-6 of 1; normalised).
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "crate::limits::exact::option"
+    )]
+    pub quaternion: Option<[f64; 4]>,
 }
 
 /// The whole scenario file.

@@ -8,7 +8,10 @@ pub mod preset;
 pub use crate::collision::{BodyModel, CheckerKind};
 pub use crate::planning::{PlannerConfig, Schedule};
 pub use config::{Algorithm, ObjectiveWeights, OptimizerConfig};
-pub use file::{AxesSpec, AxisSpec, LinkSpec, ObstacleSpec, ParamSpec, ScenarioSpec, ShapeKind};
+pub use file::{
+    AxesSpec, AxisSpec, LinkSpec, ObstacleSpec, OrientationSpec, ParamSpec, ScenarioSpec,
+    ShapeKind, TaskSpec,
+};
 
 use crate::design::{AxisRanges, Design, DesignSpace, LinkDesign, Param, Variable};
 use crate::error::{fmt_list, Error, Num, Result};
@@ -17,7 +20,7 @@ use crate::limits::{
     within, MAX_ANGLE, MAX_COLLIDERS_PER_LINK, MAX_LENGTH, MAX_LINKS, MAX_OBSTACLES,
     MAX_POPULATION, MAX_SCENE_MESH_TRIANGLES, MAX_SETTING, MAX_TASKS,
 };
-use crate::world::{Contact, Obstacle, ObstacleShape, Workspace};
+use crate::world::{Contact, Obstacle, ObstacleShape, TaskOrientation, Workspace};
 use nalgebra::Point3;
 use std::path::{Path, PathBuf};
 
@@ -421,6 +424,10 @@ impl Scenario {
         check_non_negative_within(r.snap, MAX_LENGTH, "", "robot.snap")?;
         check_vector(&r.base.position, MAX_LENGTH, " m", "robot.base.position")?;
         check_vector(&r.base.rpy, MAX_ANGLE, " rad", "robot.base.rpy")?;
+        if let Some(t) = &r.tool {
+            check_vector(&t.position, MAX_LENGTH, " m", "robot.tool.position")?;
+            check_vector(&t.rpy, MAX_ANGLE, " rad", "robot.tool.rpy")?;
+        }
         check(
             r.uniform.index.is_none(),
             "robot.uniform.index",
@@ -517,6 +524,7 @@ impl Scenario {
             link_radius: r.link_radius,
             colliders_per_link: r.colliders_per_link,
             links,
+            tool: r.tool,
         };
         let space = DesignSpace::new(template, vars, r.snap).map_err(at("robot"))?;
         // The template's free values are placeholders: normalise them through decode.
@@ -550,11 +558,131 @@ impl Scenario {
             obstacles.push(obstacle);
         }
         let mut tasks = Vec::with_capacity(spec.task.len());
+        let mut orientations = Vec::with_capacity(spec.task.len());
         for (j, t) in spec.task.iter().enumerate() {
             check_vector(&t.point, MAX_LENGTH, " m", format!("task[{j}].point"))?;
             tasks.push(Point3::from(t.point));
+            orientations.push(Self::task_orientation(j, t)?);
         }
-        Workspace::new(obstacles, tasks, spec.clearance)
+        Ok(Workspace::new(obstacles, tasks, spec.clearance)?.with_orientations(orientations))
+    }
+
+    /// The orientation constraint of `[[task]]` number `j`: none, a full orientation or an
+    /// approach cone, validated (one of the two at most, each with its tolerance in `[0, π]`,
+    /// a unit quaternion within 1e-6, a non-zero approach vector; both normalised).
+    fn task_orientation(j: usize, t: &TaskSpec) -> Result<TaskOrientation> {
+        let field = |f: &str| format!("task[{j}].{f}");
+        let tolerance = |v: Option<f64>, name: &str, of: &str| -> Result<f64> {
+            let v = v.ok_or_else(|| {
+                Error::invalid(
+                    field(name),
+                    "missing",
+                    format!("`{of}` needs `{name}` (radians, in [0, π])"),
+                )
+            })?;
+            check(
+                (0.0..=std::f64::consts::PI).contains(&v),
+                field(name),
+                Num(v),
+                "must lie in [0, π] (radians)",
+            )?;
+            Ok(v)
+        };
+        let unused = |present: bool, name: &str, of: &str| {
+            check(
+                !present,
+                field(name),
+                "given",
+                &format!("`{name}` applies only with `{of}`"),
+            )
+        };
+        match (&t.orientation, &t.approach) {
+            (Some(_), Some(a)) => Err(Error::invalid(
+                field("approach"),
+                fmt_list(a),
+                "give either `orientation` or `approach`, not both",
+            )),
+            (None, None) => {
+                unused(
+                    t.orientation_tolerance.is_some(),
+                    "orientation_tolerance",
+                    "orientation",
+                )?;
+                unused(
+                    t.approach_tolerance.is_some(),
+                    "approach_tolerance",
+                    "approach",
+                )?;
+                Ok(TaskOrientation::Free)
+            }
+            (None, Some(a)) => {
+                unused(
+                    t.orientation_tolerance.is_some(),
+                    "orientation_tolerance",
+                    "orientation",
+                )?;
+                check_vector(a, MAX_LENGTH, "", field("approach"))?;
+                let v = nalgebra::Vector3::from(*a);
+                check(
+                    v.norm() > 1e-9,
+                    field("approach"),
+                    fmt_list(a),
+                    "must be a non-zero direction",
+                )?;
+                Ok(TaskOrientation::Approach {
+                    axis: nalgebra::Unit::new_normalize(v),
+                    tolerance: tolerance(t.approach_tolerance, "approach_tolerance", "approach")?,
+                })
+            }
+            (Some(o), None) => {
+                unused(
+                    t.approach_tolerance.is_some(),
+                    "approach_tolerance",
+                    "approach",
+                )?;
+                let rotation = match (o.rpy, o.quaternion) {
+                    (Some(_), Some(q)) => {
+                        return Err(Error::invalid(
+                            field("orientation.quaternion"),
+                            fmt_list(&q),
+                            "give either `rpy` or `quaternion`, not both",
+                        ))
+                    }
+                    (None, None) => {
+                        return Err(Error::invalid(
+                            field("orientation"),
+                            "{}",
+                            "needs `rpy = [roll, pitch, yaw]` or `quaternion = [x, y, z, w]`",
+                        ))
+                    }
+                    (Some(rpy), None) => {
+                        check_vector(&rpy, MAX_ANGLE, " rad", field("orientation.rpy"))?;
+                        nalgebra::Rotation3::from_euler_angles(rpy[0], rpy[1], rpy[2])
+                    }
+                    (None, Some(q)) => {
+                        let n = q.iter().map(|v| v * v).sum::<f64>().sqrt();
+                        check(
+                            q.iter().all(|v| v.is_finite()) && (n - 1.0).abs() <= 1e-6,
+                            field("orientation.quaternion"),
+                            fmt_list(&q),
+                            "must be a unit quaternion [x, y, z, w] (norm within 1e-6 of 1)",
+                        )?;
+                        nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
+                            q[3], q[0], q[1], q[2],
+                        ))
+                        .to_rotation_matrix()
+                    }
+                };
+                Ok(TaskOrientation::Pose {
+                    rotation,
+                    tolerance: tolerance(
+                        t.orientation_tolerance,
+                        "orientation_tolerance",
+                        "orientation",
+                    )?,
+                })
+            }
+        }
     }
 
     fn obstacle(k: usize, o: &ObstacleSpec, dir: &Path) -> Result<Obstacle> {

@@ -169,6 +169,7 @@ pub fn generate(preset: Preset, seed: u64) -> ScenarioSpec {
             colliders_per_link: 4,
             snap: 1e-3,
             base: Placement::default(),
+            tool: None,
             uniform: LinkSpec {
                 a: Some(ParamSpec::Free(0.0, MAX_LINK)),
                 axes: Some(axes),
@@ -204,8 +205,61 @@ pub fn generate(preset: Preset, seed: u64) -> ScenarioSpec {
             .map(|p| TaskSpec {
                 name: None,
                 point: [p.x, p.y, p.z],
+                orientation: None,
+                orientation_tolerance: None,
+                approach: None,
+                approach_tolerance: None,
             })
             .collect(),
+    }
+}
+
+/// Half-angle of the approach cones [`orient`] adds (radians): 15°, rounded as the files are.
+pub const APPROACH_TOLERANCE: f64 = 0.2618;
+/// Largest angle between an approach direction [`orient`] draws and the outward direction from
+/// the base to the task point (radians): 60°.
+pub const APPROACH_SPREAD: f64 = PI / 3.0;
+
+/// Gives every task of a generated scenario an approach cone ([`APPROACH_TOLERANCE`], 15°)
+/// about a random direction within [`APPROACH_SPREAD`] of the outward direction from the base
+/// to the point (uniform on that spherical cap; for the planar preset, uniform in that angle
+/// within the XZ plane, where the planar arm's tool axis stays). The directions come from their
+/// own random stream of `seed` (stream 1), so the obstacles and points stay those of
+/// [`generate`] and the same seed always gives the same cones.
+pub fn orient(preset: Preset, spec: &mut ScenarioSpec, seed: u64) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    rng.set_stream(1);
+    let planar = preset == Preset::Paper2d;
+    for t in &mut spec.task {
+        let p = Vector3::from(t.point);
+        let out = p.normalize();
+        let d = if planar {
+            let a = rng.random_range(-APPROACH_SPREAD..APPROACH_SPREAD);
+            // Rotation about y by a in the XZ plane.
+            Vector3::new(
+                out.x * a.cos() + out.z * a.sin(),
+                0.0,
+                -out.x * a.sin() + out.z * a.cos(),
+            )
+        } else {
+            // Uniform on the cap: cos θ uniform in [cos spread, 1], azimuth uniform.
+            let c = rng.random_range(APPROACH_SPREAD.cos()..1.0);
+            let phi = rng.random_range(0.0..2.0 * PI);
+            let side = if out.x.abs() < 0.9 {
+                Vector3::x()
+            } else {
+                Vector3::y()
+            };
+            let u = out.cross(&side).normalize();
+            let v = out.cross(&u);
+            let sn = (1.0 - c * c).max(0.0).sqrt();
+            out * c + (u * phi.cos() + v * phi.sin()) * sn
+        };
+        t.approach = Some([round4(d.x), round4(d.y), round4(d.z)]);
+        t.approach_tolerance = Some(APPROACH_TOLERANCE);
+    }
+    if let Some(name) = &mut spec.name {
+        name.push_str(", approach cones");
     }
 }
 
@@ -225,6 +279,31 @@ pub fn to_toml(preset: Preset, spec: &ScenarioSpec) -> String {
 mod tests {
     use super::*;
     use crate::scenario::Scenario;
+
+    #[test]
+    fn approach_cones_are_deterministic_and_keep_the_points() {
+        for preset in [Preset::Paper2d, Preset::Paper3d] {
+            let plain = generate(preset, 5);
+            let mut a = generate(preset, 5);
+            orient(preset, &mut a, 5);
+            let mut b = generate(preset, 5);
+            orient(preset, &mut b, 5);
+            assert_eq!(a, b);
+            assert_eq!(a.obstacle, plain.obstacle);
+            for (t, p) in a.task.iter().zip(&plain.task) {
+                assert_eq!(t.point, p.point);
+                let d = Vector3::from(t.approach.unwrap());
+                assert!((d.norm() - 1.0).abs() < 1e-3);
+                let out = Vector3::from(t.point).normalize();
+                assert!(d.normalize().dot(&out) >= APPROACH_SPREAD.cos() - 1e-3);
+                if preset == Preset::Paper2d {
+                    assert_eq!(d.y, 0.0);
+                }
+            }
+            let s = Scenario::from_spec(&a).unwrap();
+            assert!(s.workspace.has_orientations());
+        }
+    }
 
     #[test]
     fn presets_are_valid_deterministic_and_clear_at_home() {

@@ -1,6 +1,7 @@
 //! The workspace: obstacles, task points and clearance (paper §II-B, Eq. 3–5).
 
 use super::obstacle::Obstacle;
+use super::task::TaskOrientation;
 use crate::error::{Error, Result};
 use crate::kinematics::Chain;
 use nalgebra::Point3;
@@ -22,8 +23,11 @@ pub struct Contact {
 pub struct Workspace {
     /// The obstacles.
     pub obstacles: Vec<Obstacle>,
-    /// The task points the end effector must reach.
+    /// The task points the tool centre point must reach.
     pub tasks: Vec<Point3<f64>>,
+    /// The orientation constraint of each task, in the order of `tasks` (all
+    /// [`TaskOrientation::Free`] for point tasks).
+    pub orientations: Vec<TaskOrientation>,
     /// Clearance `ε` (metres), at least 0.
     pub clearance: f64,
 }
@@ -36,12 +40,33 @@ impl Workspace {
     /// A validated workspace.
     pub fn new(obstacles: Vec<Obstacle>, tasks: Vec<Point3<f64>>, clearance: f64) -> Result<Self> {
         let w = Workspace {
+            orientations: vec![TaskOrientation::Free; tasks.len()],
             obstacles,
             tasks,
             clearance,
         };
         w.validate()?;
         Ok(w)
+    }
+
+    /// The same workspace with an orientation constraint per task (`orientations` has one
+    /// entry per task).
+    ///
+    /// # Panics
+    /// When the lengths differ.
+    pub fn with_orientations(mut self, orientations: Vec<TaskOrientation>) -> Self {
+        assert_eq!(
+            orientations.len(),
+            self.tasks.len(),
+            "one orientation per task"
+        );
+        self.orientations = orientations;
+        self
+    }
+
+    /// True when some task constrains the tool's orientation.
+    pub fn has_orientations(&self) -> bool {
+        self.orientations.iter().any(|o| !o.is_free())
     }
 
     /// Checks the clearance, that there is at least one task, that every task point is finite,

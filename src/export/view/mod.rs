@@ -427,13 +427,30 @@ pub fn view_data(input: &ViewInput) -> Value {
         .enumerate()
         .map(|(i, p)| {
             let t = reached[i];
-            json!({
+            // The direction the tool's z axis must point along: the approach, or the target
+            // rotation's z axis for a full pose.
+            let approach = match ws.orientations.get(i) {
+                Some(crate::world::TaskOrientation::Approach { axis, .. }) => {
+                    Some([axis.x, axis.y, axis.z])
+                }
+                Some(crate::world::TaskOrientation::Pose { rotation, .. }) => {
+                    let z = rotation.matrix().column(2);
+                    Some([z[0], z[1], z[2]])
+                }
+                _ => None,
+            };
+            let mut v = json!({
                 "index": i,
                 "point": [p.x, p.y, p.z],
                 "reached": t.is_some_and(|t| t.reached),
                 "error": t.map(|t| t.error),
                 "end_effector": t.map(|t| t.end_effector),
-            })
+            });
+            if let Some(a) = approach {
+                v["approach"] = json!(a);
+                v["angle_error"] = json!(t.and_then(|t| t.approach_error.or(t.orientation_error)));
+            }
+            v
         })
         .collect();
     let mut paths = Vec::new();
