@@ -181,3 +181,48 @@ fn ctrl_c_writes_the_best_design_so_far() {
     assert_eq!(best["stopped"], "interrupted");
     assert!(best["design"]["links"].as_array().unwrap().len() == 8);
 }
+
+/// `--evaluations` on the command line replaces both of the scenario's budgets: the scenario's
+/// time limit (here a microsecond) does not cut it short, so the result depends on the seed
+/// only; without a budget on the command line the scenario's time limit holds.
+#[test]
+fn an_evaluation_budget_replaces_the_scenario_time_limit() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(scenario()).unwrap();
+    assert!(text.contains("\ntime_limit = 60.0\n"));
+    let fast = dir.path().join("short-limit.toml");
+    std::fs::write(
+        &fast,
+        text.replace("\ntime_limit = 60.0\n", "\ntime_limit = 0.000001\n"),
+    )
+    .unwrap();
+    // The evaluations of the run, or None when it stopped before the first generation.
+    let run = |out: &Path, extra: &[&str]| {
+        let o = Command::new(BIN)
+            .arg("optimize")
+            .arg(&fast)
+            .args(["--seed", "3", "--quiet", "--recheck-seeds", "0", "--out"])
+            .arg(out)
+            .args(extra)
+            .output()
+            .unwrap();
+        if !o.status.success() {
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert!(err.contains("stopped before any evaluation"), "{err}");
+            return None;
+        }
+        let best: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("best.json")).unwrap()).unwrap();
+        best["evaluations"].as_u64()
+    };
+    // Generations of 32, then 30: 96 evaluations end after the fourth, at 122.
+    assert_eq!(
+        run(&dir.path().join("budget"), &["--evaluations", "96"]),
+        Some(122)
+    );
+    let limited = run(&dir.path().join("limited"), &[]);
+    assert!(
+        limited.is_none_or(|n| n < 122),
+        "the scenario's time limit did not stop it: {limited:?}"
+    );
+}

@@ -44,11 +44,14 @@ pub struct Args {
     #[arg(long, conflicts_with = "resume")]
     pub seed: Option<u64>,
     /// Wall-clock budget in seconds, over the whole run (with --resume: a new total, which
-    /// extends the run). Default: the scenario's.
+    /// extends the run). Default: the scenario's budgets, when neither --time-limit nor
+    /// --evaluations is given (either replaces both of the scenario's).
     #[arg(long)]
     pub time_limit: Option<f64>,
     /// Budget in objective evaluations, over the whole run (with --resume: a new total).
-    /// Default: the scenario's.
+    /// Default: the scenario's budgets, when neither --time-limit nor --evaluations is given
+    /// (either replaces both of the scenario's: `--evaluations N` alone runs N evaluations
+    /// however long they take, so the result depends on the seed only).
     #[arg(long)]
     pub evaluations: Option<f64>,
     /// Seconds between checkpoints. Default: the scenario's.
@@ -222,11 +225,22 @@ pub fn prepare(args: &Args) -> Result<Prepared, kinsynth::Error> {
                 algorithm = a;
             }
             override_planner(&mut planner, checker, lmax)?;
+            // Budgets on the command line replace both of the scenario's (its time limit
+            // would otherwise cut an evaluation budget short on a slow machine).
+            let given = time_limit.is_some() || evaluations.is_some();
             let options = RunOptions {
                 algorithm,
                 seed: seed.unwrap_or(s.seed),
-                time_limit: time_limit.or(s.optimizer.time_limit),
-                evaluations: evaluations.or(s.optimizer.evaluations),
+                time_limit: if given {
+                    time_limit
+                } else {
+                    s.optimizer.time_limit
+                },
+                evaluations: if given {
+                    evaluations
+                } else {
+                    s.optimizer.evaluations
+                },
                 patience: s.optimizer.patience,
                 checkpoint_interval: checkpoint_interval.unwrap_or(s.optimizer.checkpoint_interval),
                 recheck_seeds: recheck_seeds.unwrap_or(s.optimizer.recheck_seeds),
