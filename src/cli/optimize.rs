@@ -14,7 +14,8 @@ const MAX_EVALUATIONS: u64 = 1_000_000_000_000;
 /// Optimise a design for a scenario (the main job): GA, PSO or ASA over the design space.
 ///
 /// Writes into --out (or the --resume directory): best.json (the best design and its
-/// figures), history.csv (one row per generation), reach.json (the best design's
+/// figures; the same bytes for the same seed), time.json (the run's wall-clock seconds),
+/// history.csv (one row per generation), reach.json (the best design's
 /// reachability report), convergence.svg (best R and cost against time), report.html (the
 /// browser report in 3D: scene, design, paths, cost and settings), robot.urdf (the
 /// best design as URDF), robot.srdf (its planning group and allowed-collision matrix),

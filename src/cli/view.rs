@@ -49,9 +49,21 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         (None, None) => Some(s.space.largest()),
     };
     // A best.json also carries the run's figures.
+    // Its wall-clock time is in the time.json beside it, when there is one.
     let summary: Option<kinsynth::optimize::RunSummary> = args.design.as_ref().and_then(|p| {
         let text = kinsynth::limits::read_text(p, kinsynth::limits::MAX_TEXT_FILE_BYTES).ok()?;
-        serde_json::from_str(&text).ok()
+        let mut summary: kinsynth::optimize::RunSummary = serde_json::from_str(&text).ok()?;
+        let time = p.with_file_name(kinsynth::optimize::runner::files::TIME);
+        if let Some(t) = kinsynth::limits::read_text(&time, kinsynth::limits::MAX_TEXT_FILE_BYTES)
+            .ok()
+            .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+        {
+            summary.elapsed_s = t["elapsed_s"]
+                .as_f64()
+                .filter(|s| s.is_finite())
+                .unwrap_or(0.0);
+        }
+        Some(summary)
     });
     let report = match &args.reach {
         Some(p) => Some(load_reach(p, &s.workspace.tasks, chain.dof())?),

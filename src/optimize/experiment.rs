@@ -423,11 +423,12 @@ pub fn merge(dirs: &[std::path::PathBuf], out: &Path) -> Result<Vec<RunRecord>> 
                     path: best.clone(),
                     source,
                 })?;
-            let summary: RunSummary =
+            let mut summary: RunSummary =
                 serde_json::from_str(&text).map_err(|e| crate::Error::Parse {
                     file: best.clone(),
                     message: e.to_string(),
                 })?;
+            summary.elapsed_s = read_elapsed(&run_dir.join(super::runner::files::TIME))?;
             let history = Runner::read_checkpoint(&run_dir)?.history;
             records.push(RunRecord {
                 workspace: w,
@@ -559,4 +560,28 @@ fn write_tables(
         root.present().expect("present");
     }
     write_atomic(&out.join("curves.svg"), svg.as_bytes())
+}
+
+/// The `elapsed_s` of a run's `time.json`.
+fn read_elapsed(path: &Path) -> Result<f64> {
+    let text =
+        crate::limits::read_text(path, crate::limits::MAX_TEXT_FILE_BYTES).map_err(|source| {
+            crate::Error::Read {
+                path: path.to_path_buf(),
+                source,
+            }
+        })?;
+    let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| crate::Error::Parse {
+        file: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    match v["elapsed_s"].as_f64() {
+        Some(s) if s.is_finite() && s >= 0.0 => Ok(s),
+        _ => Err(crate::Error::invalid(
+            "elapsed_s",
+            v["elapsed_s"].to_string(),
+            "must be a finite number of seconds ≥ 0",
+        )
+        .in_file(path)),
+    }
 }

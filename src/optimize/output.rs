@@ -86,7 +86,10 @@ pub struct RunSummary {
     pub evaluations: u64,
     /// Generations made.
     pub generations: u64,
-    /// Seconds spent.
+    /// Seconds spent. Wall-clock time is not fixed by the seed, so it is written to
+    /// `time.json` ([`files::TIME`]), not to `best.json`: two runs with the same seed write the
+    /// same `best.json`, byte for byte.
+    #[serde(skip)]
     pub elapsed_s: f64,
     /// Seed.
     pub seed: u64,
@@ -123,6 +126,8 @@ pub struct RunSummary {
 pub mod files {
     /// The best design and its figures.
     pub const BEST: &str = "best.json";
+    /// The run's wall-clock seconds (`elapsed_s`, `recheck_s`), kept apart from `best.json`.
+    pub const TIME: &str = "time.json";
     /// One row per generation.
     pub const HISTORY: &str = "history.csv";
     /// The reachability report of the best design.

@@ -935,6 +935,16 @@ impl<'a> Runner<'a> {
     ) -> Result<()> {
         let best = serde_json::to_string_pretty(summary).expect("a summary serialises");
         write_atomic(&self.out.join(files::BEST), best.as_bytes())?;
+        let time = serde_json::json!({
+            "elapsed_s": summary.elapsed_s,
+            "recheck_s": summary.recheck_s,
+        });
+        write_atomic(
+            &self.out.join(files::TIME),
+            serde_json::to_string_pretty(&time)
+                .expect("numbers serialise")
+                .as_bytes(),
+        )?;
         write_atomic(&self.out.join(files::REACH), report.to_json().as_bytes())?;
         crate::export::write_urdf(&summary.design, &self.out.join(files::URDF))?;
         crate::export::write_srdf(
