@@ -169,11 +169,30 @@ fn reach_tree_is_the_planners_tree_and_a_broken_tree_is_refused() {
             );
         }
     }
+    // One parent fewer than nodes.
+    let page = dir.path().join("page.html");
+    let mut short = read(&with_tree);
+    short["tree"]["parents"].as_array_mut().unwrap().pop();
+    let short_file = dir.path().join("short.json");
+    std::fs::write(&short_file, short.to_string()).unwrap();
+    let o = kinsynth(&[
+        "view".as_ref(),
+        scenario("paper-2d").as_os_str(),
+        "--reach".as_ref(),
+        short_file.as_os_str(),
+        "-o".as_ref(),
+        page.as_os_str(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("short.json: tree.parents = "), "{err}");
+    assert!(err.contains("must have one entry per node"), "{err}");
+    assert!(!page.exists());
     // A parent that names no node.
     let mut broken = read(&with_tree);
     broken["tree"]["parents"][3] = 1_000_000.into();
     std::fs::write(&with_tree, broken.to_string()).unwrap();
-    let page = dir.path().join("page.html");
     let o = kinsynth(&[
         "view".as_ref(),
         scenario("paper-2d").as_os_str(),

@@ -86,6 +86,25 @@ fn two_shards_merge_into_the_unsharded_tables() {
     for f in ["runs.csv", "curves.csv", "curves.svg"] {
         assert_eq!(read(&again.join(f)), read(&whole.join(f)), "{f}");
     }
+    // The seconds come from each run's time.json: a bad or missing one is refused, naming it.
+    let time = whole.join("workspace0/method0/time.json");
+    std::fs::write(&time, r#"{"elapsed_s": -1.0}"#).unwrap();
+    let e = merge(std::slice::from_ref(&whole), &dir.path().join("bad"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains(&time.display().to_string()) && e.contains("elapsed_s = -1"),
+        "{e}"
+    );
+    std::fs::remove_file(&time).unwrap();
+    let e = merge(std::slice::from_ref(&whole), &dir.path().join("bad"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains(&time.display().to_string()), "{e}");
+    assert!(
+        !dir.path().join("bad").join("runs.csv").exists(),
+        "nothing is written"
+    );
 
     // A missing slice, a slice given twice and a slice of another experiment are refused.
     let e = merge(std::slice::from_ref(&a), &dir.path().join("m1"))
