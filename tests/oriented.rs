@@ -5,7 +5,7 @@
 //! the task's tolerance and the report.
 
 use k::nalgebra as kna;
-use kinsynth::design::{AxisRanges, Design, LinkDesign};
+use kinsynth::design::{Design, LinkDesign};
 use kinsynth::kinematics::{Axis, Chain, Placement, Range};
 use kinsynth::planning::ik::{dls_oriented, IkWork};
 use kinsynth::planning::{reachability_tasks, ReachReport};
@@ -17,6 +17,9 @@ use rand_chacha::ChaCha8Rng;
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 use std::process::Command;
+
+mod common;
+use common::ranges;
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -35,42 +38,14 @@ fn kinsynth(args: &[&str]) -> (bool, String, String) {
     )
 }
 
-fn ranges(list: &[(Axis, f64, f64)]) -> AxisRanges {
-    let mut r = AxisRanges::default();
-    for &(a, lo, hi) in list {
-        *r.get_mut(a) = Range::new(lo, hi);
-    }
-    r
-}
-
 /// A UR5 from its DH table, with a tool 0.1 m along the flange's z axis, tilted.
 fn ur5_with_tool() -> Design {
-    let d = [0.089159, 0.0, 0.0, 0.10915, 0.09465, 0.0823];
-    let a = [0.0, -0.425, -0.39225, 0.0, 0.0, 0.0];
-    let alpha = [PI / 2.0, 0.0, 0.0, PI / 2.0, -PI / 2.0, 0.0];
-    let joint = ranges(&[(Axis::Rz, -2.0 * PI, 2.0 * PI)]);
-    let mut links = vec![LinkDesign {
-        axes: joint,
-        ..LinkDesign::default()
-    }];
-    for i in 0..6 {
-        links.push(LinkDesign {
-            theta: 0.0,
-            d: d[i],
-            a: a[i],
-            alpha: alpha[i],
-            axes: if i < 5 { joint } else { AxisRanges::default() },
-        });
-    }
     Design {
-        base: Placement::default(),
-        link_radius: 0.05,
-        colliders_per_link: 4,
-        links,
         tool: Some(Placement {
             position: [0.0, 0.02, 0.1],
             rpy: [0.3, 0.0, 0.0],
         }),
+        ..common::ur5()
     }
 }
 

@@ -3,7 +3,7 @@
 //! through `kinsynth reach`, trajectories, and the bundled UR5.
 
 use k::nalgebra as kna;
-use kinsynth::design::{AxisRanges, Design, LinkDesign, Param};
+use kinsynth::design::{Design, LinkDesign, Param};
 use kinsynth::export::urdf::{design_to_urdf, design_to_urdf_string, EFFORT, VELOCITY};
 use kinsynth::import::urdf::{chain_from_urdf, load_chain};
 use kinsynth::kinematics::{Axis, Chain, Placement, Range};
@@ -15,6 +15,9 @@ use rand_chacha::ChaCha8Rng;
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 use std::process::Command;
+
+mod common;
+use common::{ranges, ur5};
 
 const CONFIGS: usize = 1000;
 
@@ -59,14 +62,6 @@ fn optimised() -> Design {
     assert_eq!(d.links[2].a, 0.0);
     assert!(d.joints_kept() < space.largest().joints_kept());
     d
-}
-
-fn ranges(list: &[(Axis, f64, f64)]) -> AxisRanges {
-    let mut r = AxisRanges::default();
-    for &(a, lo, hi) in list {
-        *r.get_mut(a) = Range::new(lo, hi);
-    }
-    r
 }
 
 /// Everything at once: a tilted base, every DH parameter, all six axes free, constant axes
@@ -123,34 +118,6 @@ fn everything() -> Design {
                 ..LinkDesign::default()
             },
         ],
-        tool: None,
-    }
-}
-
-/// A UR5 from its DH table, as `examples/make_ur5.rs` builds it.
-fn ur5() -> Design {
-    let d = [0.089159, 0.0, 0.0, 0.10915, 0.09465, 0.0823];
-    let a = [0.0, -0.425, -0.39225, 0.0, 0.0, 0.0];
-    let alpha = [PI / 2.0, 0.0, 0.0, PI / 2.0, -PI / 2.0, 0.0];
-    let joint = ranges(&[(Axis::Rz, -2.0 * PI, 2.0 * PI)]);
-    let mut links = vec![LinkDesign {
-        axes: joint,
-        ..LinkDesign::default()
-    }];
-    for i in 0..6 {
-        links.push(LinkDesign {
-            theta: 0.0,
-            d: d[i],
-            a: a[i],
-            alpha: alpha[i],
-            axes: if i < 5 { joint } else { AxisRanges::default() },
-        });
-    }
-    Design {
-        base: Placement::default(),
-        link_radius: 0.05,
-        colliders_per_link: 4,
-        links,
         tool: None,
     }
 }
