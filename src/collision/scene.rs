@@ -43,6 +43,10 @@ pub struct CollisionScene {
     clearance: f64,
 }
 
+/// Scenes with at most this many obstacles are searched by one pass over their bounding
+/// spheres in [`CollisionScene::nearest`] instead of through the hierarchy.
+const LINEAR_SCAN: usize = 48;
+
 /// Squared distance from `p` to the bounding box of a hierarchy node (0 inside).
 #[inline]
 fn node_distance_squared(node: &BvhNode, p: &Point3<f64>) -> f64 {
@@ -156,6 +160,23 @@ impl CollisionScene {
     ) -> (f64, u32) {
         if self.obstacles.is_empty() || cap.is_nan() {
             return (cap, u32::MAX);
+        }
+        if self.obstacles.len() <= LINEAR_SCAN {
+            // Few obstacles: one pass over their bounding spheres beats the hierarchy.
+            let (mut best, mut nearest) = (cap, u32::MAX);
+            for (k, (c, r)) in self.bounds.iter().enumerate() {
+                let reach = best + r + radius;
+                if k as u32 == skip || (reach > 0.0 && (c - center).norm_squared() >= reach * reach)
+                {
+                    continue;
+                }
+                let d = dist(k);
+                if d < best {
+                    best = d;
+                    nearest = k as u32;
+                }
+            }
+            return (best, nearest);
         }
         let box_cost =
             |node: &BvhNode, _best: f64| node_distance_squared(node, center).sqrt() - radius;

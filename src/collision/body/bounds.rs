@@ -19,9 +19,9 @@ pub struct MotionBounds {
     bodies: usize,
     dof: usize,
     w: Vec<f64>,
-    /// Per free axis: the column of its frame's rotation that is the axis direction, for a
-    /// rotation; `None` for a translation.
-    rotation: Vec<Option<usize>>,
+    /// Per free axis: the column of its frame's rotation that is the axis direction, and
+    /// whether it is a rotation.
+    column: Vec<(usize, bool)>,
 }
 
 impl MotionBounds {
@@ -53,16 +53,16 @@ impl MotionBounds {
                 };
             }
         }
-        let rotation = chain
+        let column = chain
             .free_axes()
             .iter()
-            .map(|a| a.axis.is_rotation().then(|| a.axis.index()))
+            .map(|a| (a.axis.index() % 3, a.axis.is_rotation()))
             .collect();
         MotionBounds {
             bodies: n,
             dof,
             w,
-            rotation,
+            column,
         }
     }
 
@@ -107,11 +107,11 @@ impl MotionBounds {
     }
 
     /// For free axis `j`: the column of the rotation of the frame after it
-    /// ([`crate::kinematics::Frames::axis_frames`]) that is its direction, when it is a
-    /// rotation; `None` for a translation.
+    /// ([`crate::kinematics::Frames::axis_frames`]) that is its direction, and whether the axis
+    /// is a rotation (else a translation along it).
     #[inline]
-    pub fn rotation_column(&self, j: usize) -> Option<usize> {
-        self.rotation[j]
+    pub fn axis_column(&self, j: usize) -> (usize, bool) {
+        self.column[j]
     }
 
     /// Number of free axes covered.

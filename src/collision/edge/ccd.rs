@@ -158,7 +158,7 @@ impl EdgeChecker for Ccd {
         } = scratch;
         let body = &**body;
         let ns = body.segments();
-        work.prepare(bounds, from, to);
+        work.prepare(bounds, body, from, to);
         let n = substeps(chain, &work.delta);
         stats.fk += 1;
         chain.fk(from, fa);

@@ -16,13 +16,20 @@
 //! only through the joints between them, so a self pair `(p, q)` uses the relative bound
 //! `D_pq = Σ_{level(p) ≤ j < level(q)} w_qj·|Δa_j|`.
 //!
-//! The bound is tightened from the configuration itself: a rotation axis `j` moves a point at
-//! speed `|ω̂_j × (p − o_j)|·|Δa_j|`, the point's distance from the axis *line*. At an evaluated
-//! configuration that distance `ρ_bj` is known (largest at a capsule's end points), and it
-//! changes no faster than the axes after `j` move the body, so over an interval of length `s`
-//! with that configuration at one end the factor `w_bj` may be replaced by
-//! `min(w_bj, ρ_bj + s·Σ_{k > j} w_bk·|Δa_k|)`. Deep in the bisection, where `s` is small, this
-//! is close to the true lever arm.
+//! The bound is tightened from the configurations themselves. At an evaluated configuration
+//! the velocity field of every link is known exactly: the prefix sums of the axes' twists
+//! `Δa_j·(ω̂_j, o_j × ω̂_j)` (or `Δa_j·(0, ŝ_j)` for a translation) give the twist of the link
+//! moved by the first `k` axes, and the difference of two prefixes the motion of one link in
+//! the frame of another. A body's speed `u` (largest at a capsule core's end points, since
+//! velocity is affine along a segment; a solid's bounding-sphere centre plus `|ω|·r`) is then
+//! exact at the ends of an interval. Between them it changes no faster than
+//! `A = Σ_j |Δa_j|·((Ω_j − Ω_l)·w_bj + [j rotates]·S_j)` (relative to level `l`), where `Ω_j`
+//! sums the rotation rates of the axes before `j` and `S_j = Σ_{k ≥ j} w_bk·|Δa_k|`: the
+//! derivative of `Δa_j·ω̂_j × (p − o_j)` is `ω_{<j} × (Δa_j·ω̂_j × (p − o_j))` (the axes before
+//! `j` turn axis and lever arm together) plus `Δa_j·ω̂_j × v_{≥j}(p)` (the body moving relative
+//! to the axis). So over an interval of length `s` with end speeds `u0`, `u1` no point moves
+//! farther than the integral of `min(D, u0 + A·τ, u1 + A·(s − τ))`, which bisection shrinks
+//! towards the true path length (the acceleration term falls with `s²`).
 //!
 //! A body's clearance from the environment, `c(t)` = (distance to the nearest obstacle) − `ε`,
 //! and the distance between the two bodies of a self pair, change no faster than the bodies'
@@ -44,7 +51,7 @@ use super::{EdgeChecker, Scratch};
 use crate::collision::body::{BodyModel, MotionBounds, Placed, RobotBody};
 use crate::collision::scene::CollisionScene;
 use crate::kinematics::{Chain, Frames};
-use nalgebra::Point3;
+use nalgebra::{Point3, Vector3};
 use std::sync::Arc;
 
 /// Bisection depth after which an unproven interval (length `2^-MAX_DEPTH`) counts as blocked.
@@ -53,9 +60,9 @@ pub const MAX_DEPTH: u32 = 30;
 /// `Item::other` of a body's clearance from the whole environment.
 const ENV: u32 = u32::MAX;
 
-/// An unproven item with the clearances at both ends of its interval: a body against the whole
-/// environment (`other == ENV`; the clearance is the distance to the nearest obstacle minus
-/// `ε`), or a self pair of two bodies (`other` is then the second body).
+/// An unproven item with the clearances and speeds at both ends of its interval: a body
+/// against the whole environment (`other == ENV`; the clearance is the distance to the nearest
+/// obstacle minus `ε`), or a self pair of two bodies (`other` is then the second body).
 #[derive(Clone, Copy, Debug)]
 struct Item {
     body: u32,
@@ -63,40 +70,68 @@ struct Item {
     /// For a body against the environment: the obstacle found nearest last (`u32::MAX` if
     /// none), tried first at the next configuration.
     hint: u32,
+    /// Bound on the (relative) speed of the item's moving body over the whole edge.
     reach: f64,
+    /// Bound on the rate of change of that speed over the whole edge.
+    accel: f64,
     c0: f64,
     c1: f64,
+    /// The (relative) speed of the moving body at the interval's two ends.
+    u0: f64,
+    u1: f64,
 }
 
-/// What the bisection point of an interval gives an item: its clearance there, the children's
-/// motion bound and the nearest obstacle found.
+/// What the bisection point of an interval gives an item: its clearance and speed there, the
+/// children's motion bounds and the nearest obstacle found.
 #[derive(Clone, Copy, Debug)]
 struct Mid {
     c: f64,
-    reach: f64,
+    u: f64,
+    left: f64,
+    right: f64,
     hint: u32,
 }
 
+/// Bound on how far a body moves over an interval of length `s` whose end speeds are `u0` and
+/// `u1`, when its speed never exceeds `reach` and changes no faster than `accel`: the integral
+/// of `min(reach, u0 + accel·τ, u1 + accel·(s − τ))`, bounded above by the integral without
+/// `reach` and by `s·reach`.
+#[inline]
+fn motion(s: f64, reach: f64, u0: f64, u1: f64, accel: f64) -> f64 {
+    let ramps = if accel > 0.0 {
+        let tau = (0.5 * ((u1 - u0) / accel + s)).clamp(0.0, s);
+        let rest = s - tau;
+        u0 * tau + 0.5 * accel * tau * tau + u1 * rest + 0.5 * accel * rest * rest
+    } else {
+        s * u0.min(u1)
+    };
+    (s * reach).min(ramps * (1.0 + 1e-12))
+}
+
 /// Appends, for each item of `parent` still unproven on one child of the interval (the left
-/// `[t0, tm]` when `left`, else the right `[tm, t1]`, each of length `half`), that item on the
-/// child, with the clearances at its two ends.
-fn push_children(
-    items: &mut Vec<Item>,
-    parent: std::ops::Range<usize>,
-    mid: &[Mid],
-    half: f64,
-    left: bool,
-) {
+/// `[t0, tm]` when `left`, else the right `[tm, t1]`), that item on the child, with the
+/// clearances and speeds at its two ends.
+fn push_children(items: &mut Vec<Item>, parent: std::ops::Range<usize>, mid: &[Mid], left: bool) {
     for (i, m) in parent.zip(mid) {
         let it = items[i];
-        let (c0, c1) = if left { (it.c0, m.c) } else { (m.c, it.c1) };
-        if c0 + c1 <= half * m.reach {
-            items.push(Item {
-                c0,
-                c1,
-                reach: m.reach,
-                hint: m.hint,
+        let child = if left {
+            Item {
+                c1: m.c,
+                u1: m.u,
                 ..it
+            }
+        } else {
+            Item {
+                c0: m.c,
+                u0: m.u,
+                ..it
+            }
+        };
+        let bound = if left { m.left } else { m.right };
+        if child.c0 + child.c1 <= bound {
+            items.push(Item {
+                hint: m.hint,
+                ..child
             });
         }
     }
@@ -111,6 +146,65 @@ struct Interval {
     depth: u32,
 }
 
+/// The velocity field of a rigid motion, `v(x) = v + ω × x` (world coordinates), per unit of
+/// the edge parameter `t`.
+#[derive(Clone, Copy, Debug, Default)]
+struct Twist {
+    w: Vector3<f64>,
+    v: Vector3<f64>,
+}
+
+impl Twist {
+    #[inline]
+    fn minus(&self, o: &Twist) -> Twist {
+        Twist {
+            w: self.w - o.w,
+            v: self.v - o.v,
+        }
+    }
+
+    #[inline]
+    fn speed_at(&self, x: &Point3<f64>) -> f64 {
+        (self.v + self.w.cross(&x.coords)).norm()
+    }
+}
+
+/// Writes to `out` the `dof + 1` prefix sums of the axes' twists at the configuration of
+/// `frames`, for the step `delta`: entry `k` is the motion of the link carried by the first
+/// `k` axes (a body of level `k` moves with entry `k`; relative to a body of level `l`, with
+/// entry `k` minus entry `l`).
+#[inline]
+fn twists(bounds: &MotionBounds, frames: &Frames, delta: &[f64], out: &mut Vec<Twist>) {
+    out.clear();
+    let mut acc = Twist::default();
+    out.push(acc);
+    for (j, (f, d)) in frames.axis_frames.iter().zip(delta).enumerate() {
+        let (col, rot) = bounds.axis_column(j);
+        let axis = f.rotation.matrix().column(col).into_owned();
+        if rot {
+            acc.w += axis * *d;
+            acc.v += f.translation.vector.cross(&axis) * *d;
+        } else {
+            acc.v += axis * *d;
+        }
+        out.push(acc);
+    }
+}
+
+/// Largest speed of a point of body `b` (a capsule's core, a solid) under the motion `t`.
+#[inline(always)]
+fn speed(body: &RobotBody, frames: &Frames, placed: &Placed, b: usize, t: &Twist) -> f64 {
+    let ns = body.segments();
+    if b < ns {
+        let [p0, p1] = &frames.segments[b];
+        let v0 = t.v + t.w.cross(&p0.coords);
+        let v1 = t.v + t.w.cross(&p1.coords);
+        v0.norm_squared().max(v1.norm_squared()).sqrt()
+    } else {
+        t.speed_at(&placed.centers[b - ns]) + t.w.norm() * body.solids()[b - ns].radius
+    }
+}
+
 /// Reused buffers of the certified checker (inside [`Scratch`]).
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Work {
@@ -118,32 +212,75 @@ pub(crate) struct Work {
     pub(crate) reach: Vec<f64>,
     /// Per body, the `dof + 1` suffix sums of its motion bound ([`MotionBounds::suffix_sums`]).
     suffix: Vec<f64>,
+    /// Per body and level `l` (`dof + 1` entries): the bound on how fast the body's speed
+    /// relative to a body of level `l` changes along the edge.
+    accel: Vec<f64>,
+    /// `Ω_j`: the sum of `|Δa_k|` over the rotation axes `k < j`, for `j = 0 … dof`.
+    omega: Vec<f64>,
+    twist_a: Vec<Twist>,
+    twist_b: Vec<Twist>,
+    twist_m: Vec<Twist>,
     balls_a: Vec<(Point3<f64>, f64)>,
     balls_b: Vec<(Point3<f64>, f64)>,
     items: Vec<Item>,
-    /// Lever arms `ρ_qj` per body and axis at the configuration numbered `lever_pose[q]`.
-    lever: Vec<f64>,
-    lever_pose: Vec<u32>,
     mid: Vec<Mid>,
     stack: Vec<Interval>,
 }
 
 impl Work {
-    /// Fills `delta` with `to − from` and `reach` with each body's displacement bound for the
-    /// whole step.
-    pub(crate) fn prepare(&mut self, bounds: &MotionBounds, from: &[f64], to: &[f64]) {
+    /// Fills `delta` with `to − from`, `reach` with each body's displacement bound for the
+    /// whole step, the suffix sums and the acceleration bounds.
+    pub(crate) fn prepare(
+        &mut self,
+        bounds: &MotionBounds,
+        body: &RobotBody,
+        from: &[f64],
+        to: &[f64],
+    ) {
+        let dof = bounds.dof();
+        let stride = dof + 1;
         self.delta.clear();
         self.delta.extend(to.iter().zip(from).map(|(b, a)| b - a));
+        // Ω_j = Σ_{k<j, rotations} |Δa_k|, for j = 0 … dof.
+        self.omega.clear();
+        let mut omega = 0.0;
+        self.omega.push(omega);
+        for (j, d) in self.delta.iter().enumerate() {
+            if bounds.axis_column(j).1 {
+                omega += d.abs();
+            }
+            self.omega.push(omega);
+        }
+        let n = bounds.bodies();
         self.reach.clear();
         self.suffix.clear();
-        let stride = bounds.dof() + 1;
-        for b in 0..bounds.bodies() {
-            bounds.suffix_sums(b, &self.delta, &mut self.suffix);
-            self.reach.push(self.suffix[b * stride]);
+        self.suffix.resize(n * stride, 0.0);
+        self.accel.clear();
+        self.accel.resize(n * stride, 0.0);
+        for b in 0..n {
+            // With S_j the suffix sums of w_bj·|Δa_j|, the bound relative to level l is
+            // Σ_{j≥l} |Δa_j|·((Ω_j − Ω_l)·w_bj + [j rotates]·S_j) = G_l − Ω_l·S_l + H_l, with
+            // G_l = Σ_{j≥l} |Δa_j|·w_bj·Ω_j and H_l = Σ_{j≥l, rotations} |Δa_j|·S_j. Entries
+            // from the body's level on are 0.
+            let w = bounds.factors(b);
+            let level = body.level(b).min(dof);
+            let suffix = &mut self.suffix[b * stride..(b + 1) * stride];
+            let accel = &mut self.accel[b * stride..(b + 1) * stride];
+            let (mut sum, mut g, mut h) = (0.0, 0.0, 0.0);
+            for j in (0..level).rev() {
+                let d = self.delta[j].abs();
+                sum += w[j] * d;
+                suffix[j] = sum;
+                let omega_j = self.omega[j];
+                g += d * w[j] * omega_j;
+                if bounds.axis_column(j).1 {
+                    h += d * sum;
+                }
+                let a = (g - omega_j * sum).max(0.0) + h;
+                accel[j] = a * (1.0 + 1e-9) + 1e-12;
+            }
+            self.reach.push(suffix[0]);
         }
-        self.lever.resize(bounds.bodies() * bounds.dof(), 0.0);
-        self.lever_pose.clear();
-        self.lever_pose.resize(bounds.bodies(), u32::MAX);
     }
 
     /// Bound on how far body `q` moves relative to bodies moved by the first `level` axes.
@@ -151,66 +288,12 @@ impl Work {
     fn relative(&self, dof: usize, q: usize, level: usize) -> f64 {
         self.suffix[q * (dof + 1) + level.min(dof)]
     }
-}
 
-impl Work {
-    /// A tighter bound, over an interval of length `span` that has the configuration of
-    /// `frames`/`placed` at one end, on how far body `q` moves relative to bodies moved by the
-    /// first `from` axes. A rotation axis `j` moves a point `p` at speed `|ω̂_j × (p − o_j)|·|Δa_j|`,
-    /// the point's distance from the axis line times the rate. That distance is known at the
-    /// end of the interval (largest at a capsule's end points, plus its radius; a solid's
-    /// bounding sphere), and changes no faster than the body moves relative to the axis line,
-    /// that is by the axes after `j` (their suffix sum): so over the interval it stays below
-    /// `ρ_j + span·Σ_{k > j} w_qk·|Δa_k|`, and below `w_qj` in any case.
-    #[allow(clippy::too_many_arguments)]
+    /// Bound on how fast the speed of body `q` relative to bodies moved by the first `level`
+    /// axes changes along the edge.
     #[inline]
-    fn local_reach(
-        &mut self,
-        bounds: &MotionBounds,
-        body: &RobotBody,
-        frames: &Frames,
-        placed: &Placed,
-        pose: u32,
-        q: usize,
-        from: usize,
-        span: f64,
-    ) -> f64 {
-        let dof = bounds.dof();
-        let level = body.level(q).min(dof);
-        if self.lever_pose[q] != pose {
-            // The lever arms of body q about every axis moving it, at this configuration.
-            self.lever_pose[q] = pose;
-            let ns = body.segments();
-            let (p0, p1, extent) = if q < ns {
-                let [a, b] = frames.segments[q];
-                (a, b, body.radius(q))
-            } else {
-                let c = placed.centers[q - ns];
-                (c, c, body.solids()[q - ns].radius)
-            };
-            let levers = &mut self.lever[q * dof..q * dof + level];
-            for (j, rho) in levers.iter_mut().enumerate() {
-                *rho = match bounds.rotation_column(j) {
-                    Some(col) => {
-                        let f = &frames.axis_frames[j];
-                        let o = Point3::from(f.translation.vector);
-                        let axis = f.rotation.matrix().column(col);
-                        let r0 = axis.cross(&(p0 - o)).norm_squared();
-                        let r1 = axis.cross(&(p1 - o)).norm_squared();
-                        r0.max(r1).sqrt() + extent
-                    }
-                    None => f64::INFINITY,
-                };
-            }
-        }
-        let w = bounds.factors(q);
-        let suffix = &self.suffix[q * (dof + 1)..(q + 1) * (dof + 1)];
-        let levers = &self.lever[q * dof..q * dof + level];
-        let mut total = 0.0;
-        for j in from..level {
-            total += self.delta[j].abs() * w[j].min(levers[j] + span * suffix[j + 1]);
-        }
-        total
+    fn accel(&self, dof: usize, q: usize, level: usize) -> f64 {
+        self.accel[q * (dof + 1) + level.min(dof)]
     }
 }
 
@@ -260,7 +343,7 @@ impl EdgeChecker for Certified {
         } = scratch;
         let body = &**body;
         let dof = bounds.dof();
-        work.prepare(bounds, from, to);
+        work.prepare(bounds, body, from, to);
         work.items.clear();
         work.stack.clear();
 
@@ -271,6 +354,8 @@ impl EdgeChecker for Certified {
         body.place(fb, pb);
         body.balls(fa, pa, &mut work.balls_a);
         body.balls(fb, pb, &mut work.balls_b);
+        twists(bounds, fa, &work.delta, &mut work.twist_a);
+        twists(bounds, fb, &work.delta, &mut work.twist_b);
         // Each body against the environment: c(t) = clearance − ε moves no faster than the
         // body. c0 > D proves the whole step; otherwise c1 > D − c0 does.
         for b in 0..body.len() {
@@ -290,67 +375,97 @@ impl EdgeChecker for Certified {
             if c0 > plain {
                 continue;
             }
-            let reach = plain.min(work.local_reach(bounds, body, fa, pa, 0, b, 0, 1.0));
-            if c0 > reach {
+            let level = body.level(b);
+            let accel = work.accel(dof, b, 0);
+            let u0 = speed(body, fa, pa, b, &work.twist_a[level]);
+            let u1 = speed(body, fb, pb, b, &work.twist_b[level]);
+            let bound = motion(1.0, plain, u0, u1, accel);
+            if c0 > bound {
                 continue;
             }
-            let need = (reach - c0).max(0.0) + CAP_MARGIN;
+            let need = (bound - c0).max(0.0) + CAP_MARGIN;
             let (c1, hint) = body.clearance(scene, fb, pb, b, &work.balls_b[b], need, hint);
             if c1 <= 0.0 {
                 return false;
             }
-            if c0 + c1 > reach {
+            if c0 + c1 > bound {
                 continue;
             }
             work.items.push(Item {
                 body: b as u32,
                 other: ENV,
                 hint,
-                reach,
+                reach: plain,
+                accel,
                 c0,
                 c1,
+                u0,
+                u1,
             });
         }
         for &(p, qb) in body.self_pairs() {
             let (p, qb) = (p as usize, qb as usize);
-            let plain = work.relative(dof, qb, body.level(p));
-            let (cp, rp) = work.balls_a[p];
-            let (cq, rq) = work.balls_a[qb];
-            if (cp - cq).norm() - rp - rq > plain {
+            let level = body.level(p);
+            let plain = work.relative(dof, qb, level);
+            // Lower bounds of the distance at both ends from the bounding balls (a proof
+            // from lower bounds holds as one from the distances).
+            let ball = |balls: &[(Point3<f64>, f64)]| {
+                let ((cp, rp), (cq, rq)) = (balls[p], balls[qb]);
+                (cp - cq).norm() - rp - rq
+            };
+            let ball0 = ball(&work.balls_a);
+            if ball0 > plain {
+                continue;
+            }
+            let lq = body.level(qb);
+            let accel = work.accel(dof, qb, level);
+            let u0 = speed(
+                body,
+                fa,
+                pa,
+                qb,
+                &work.twist_a[lq].minus(&work.twist_a[level]),
+            );
+            let u1 = speed(
+                body,
+                fb,
+                pb,
+                qb,
+                &work.twist_b[lq].minus(&work.twist_b[level]),
+            );
+            let bound = motion(1.0, plain, u0, u1, accel);
+            if ball0 > bound || ball0 + ball(&work.balls_b) > bound {
                 continue;
             }
             let c0 = body.pair_distance(fa, pa, p, qb);
             if c0 <= 0.0 {
                 return false;
             }
-            if c0 > plain {
-                continue;
-            }
-            let reach =
-                plain.min(work.local_reach(bounds, body, fa, pa, 0, qb, body.level(p), 1.0));
-            if c0 > reach {
+            if c0 > bound {
                 continue;
             }
             let c1 = body.pair_distance(fb, pb, p, qb);
             if c1 <= 0.0 {
                 return false;
             }
-            if c0 + c1 > reach {
+            if c0 + c1 > bound {
                 continue;
             }
             work.items.push(Item {
                 body: p as u32,
                 other: qb as u32,
                 hint: u32::MAX,
-                reach,
+                reach: plain,
+                accel,
                 c0,
                 c1,
+                u0,
+                u1,
             });
         }
         if work.items.is_empty() {
             return true;
         }
-        let mut pose = 0u32;
         work.stack.push(Interval {
             t0: 0.0,
             t1: 1.0,
@@ -367,65 +482,51 @@ impl EdgeChecker for Certified {
                 *qi = a + tm * d;
             }
             stats.fk += 1;
-            pose += 1;
             chain.fk(q, fm);
             body.place(fm, pm);
+            twists(bounds, fm, &work.delta, &mut work.twist_m);
             let half = 0.5 * (iv.t1 - iv.t0);
             // Children: left [t0, tm] then right [tm, t1], appended after the parent's items.
-            // Per item: the clearance at tm and the children's motion bound, tightened with
-            // the lever arms at tm.
+            // Per item: the clearance and speed at tm, and the children's motion bounds.
             work.mid.clear();
             for i in iv.start..iv.start + iv.len {
                 let it = work.items[i];
                 let b = it.body as usize;
-                let (q, from) = if it.other == ENV {
-                    (b, 0)
+                let (q, twist) = if it.other == ENV {
+                    (b, work.twist_m[body.level(b)])
                 } else {
-                    (it.other as usize, body.level(b))
+                    let (l0, l1) = (body.level(b), body.level(it.other as usize));
+                    (it.other as usize, work.twist_m[l1].minus(&work.twist_m[l0]))
                 };
-                if it.other != ENV {
-                    // A self pair: its distance first; the lever arms at tm only when the
-                    // children are not proven without them (the decision is the same).
+                let um = speed(body, fm, pm, q, &twist);
+                let left = motion(half, it.reach, it.u0, um, it.accel);
+                let right = motion(half, it.reach, um, it.u1, it.accel);
+                let (cm, hint) = if it.other != ENV {
                     let cm = body.pair_distance(fm, pm, b, it.other as usize);
-                    if cm <= 0.0 {
-                        return false;
-                    }
-                    let proven = |r: f64| it.c0.min(it.c1) + cm > half * r;
-                    let reach = if proven(it.reach) {
-                        it.reach
-                    } else {
-                        it.reach
-                            .min(work.local_reach(bounds, body, fm, pm, pose, q, from, half))
-                    };
-                    work.mid.push(Mid {
-                        c: cm,
-                        reach,
-                        hint: u32::MAX,
-                    });
-                    continue;
-                }
-                // Against the environment: both children are proven once cm exceeds `need`
-                // for the parent's bound; below it the clearance is exact, and the lever arms
-                // at tm tighten the bound (the decision is the same as with the tight cap).
-                let need = (half * it.reach - it.c0.min(it.c1)).max(0.0) + CAP_MARGIN;
-                let ball = body.ball(fm, pm, b);
-                let (cm, hint) = body.clearance(scene, fm, pm, b, &ball, need, it.hint);
+                    (cm, u32::MAX)
+                } else {
+                    // Both children are proven once cm exceeds `need`; below it the
+                    // clearance is exact (the decision is the same as with no cap).
+                    let need = (left - it.c0).max(right - it.c1).max(0.0) + CAP_MARGIN;
+                    let ball = body.ball(fm, pm, b);
+                    body.clearance(scene, fm, pm, b, &ball, need, it.hint)
+                };
                 if cm <= 0.0 {
                     return false;
                 }
-                let reach = if it.c0.min(it.c1) + cm > half * it.reach {
-                    it.reach
-                } else {
-                    it.reach
-                        .min(work.local_reach(bounds, body, fm, pm, pose, q, from, half))
-                };
-                work.mid.push(Mid { c: cm, reach, hint });
+                work.mid.push(Mid {
+                    c: cm,
+                    u: um,
+                    left,
+                    right,
+                    hint,
+                });
             }
             let parent = iv.start..iv.start + iv.len;
             let left_start = work.items.len();
-            push_children(&mut work.items, parent.clone(), &work.mid, half, true);
+            push_children(&mut work.items, parent.clone(), &work.mid, true);
             let right_start = work.items.len();
-            push_children(&mut work.items, parent, &work.mid, half, false);
+            push_children(&mut work.items, parent, &work.mid, false);
             let end = work.items.len();
             if end > right_start {
                 work.stack.push(Interval {
@@ -456,10 +557,12 @@ mod tests {
     use crate::Scenario;
     use rand::{RngExt, SeedableRng};
 
-    /// The tightened bound holds: over an interval of length `s` that starts at an evaluated
-    /// configuration, no end point of any body moves farther than `s · local_reach`.
+    /// The motion bound holds: over a sub-interval `[t0, t1]` of a step, with the speeds at
+    /// its two ends from the twists of the full configuration, no point of a body's core moves
+    /// (relative to any level of the chain) farther than `motion`, and from `t0` to `t` no
+    /// farther than the one-sided ramp `u0·τ + accel·τ²/2`.
     #[test]
-    fn lever_arm_bound_covers_the_real_motion() {
+    fn motion_bound_covers_the_real_motion() {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("examples/scenarios/paper-3d.toml");
         let s = Scenario::load(&path).unwrap();
@@ -467,69 +570,115 @@ mod tests {
         let body = RobotBody::of_chain(&chain);
         let bounds = MotionBounds::new(&chain, &body);
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
-        let (mut fa, mut ft) = (chain.frames(), chain.frames());
-        let (mut pa, mut pt) = (Placed::default(), Placed::default());
+        let (mut f0, mut f1, mut ft) = (chain.frames(), chain.frames(), chain.frames());
+        let (mut p0, mut p1) = (Placed::default(), Placed::default());
         let dof = chain.dof();
         let (mut a, mut b, mut q) = (vec![0.0; dof], vec![0.0; dof], vec![0.0; dof]);
         let mut work = Work::default();
-        let mut tightened = 0;
-        for pose in 0..300u32 {
+        let (mut tw0, mut tw1) = (Vec::new(), Vec::new());
+        let (mut tight, mut cases) = (0, 0);
+        for case in 0..300 {
             chain.sample_config(&mut rng, &mut a);
-            if pose % 2 == 0 {
+            if case % 2 == 0 {
                 for (bj, aj) in b.iter_mut().zip(&a) {
                     *bj = aj + rng.random_range(-0.8..0.8);
                 }
             } else {
-                // Two axes with large steps: a distal axis swings the body away from (or
-                // towards) a proximal axis line, the case the growth term covers.
+                // Two axes with large steps.
                 b.copy_from_slice(&a);
                 for _ in 0..2 {
                     let j = rng.random_range(0..dof);
                     b[j] += rng.random_range(-2.5..2.5);
                 }
             }
-            work.prepare(&bounds, &a, &b);
-            let span: f64 = rng.random_range(0.01..1.0);
-            chain.fk(&a, &mut fa);
-            body.place(&fa, &mut pa);
-            for qb in 0..body.segments() {
-                let from = rng.random_range(0..=body.level(qb));
-                let plain = work.relative(dof, qb, from);
-                let bound = work.local_reach(&bounds, &body, &fa, &pa, pose, qb, from, span);
-                assert!(bound <= plain + 1e-12);
-                if bound < 0.9 * plain {
-                    tightened += 1;
+            // The bounds hold within the ranges (a box, so along the whole step).
+            for (bj, f) in b.iter_mut().zip(chain.free_axes()) {
+                *bj = bj.clamp(f.range.min, f.range.max);
+            }
+            work.prepare(&bounds, &body, &a, &b);
+            let t0: f64 = rng.random_range(0.0..0.9);
+            let t1: f64 = rng.random_range(t0 + 0.01..=1.0);
+            let at = |t: f64, out: &mut Vec<f64>| {
+                for ((o, x), d) in out.iter_mut().zip(&a).zip(&work.delta) {
+                    *o = x + t * d;
                 }
-                // Relative motion: move only the axes from `from` on; the bound covers the
+            };
+            at(t0, &mut q);
+            chain.fk(&q, &mut f0);
+            body.place(&f0, &mut p0);
+            twists(&bounds, &f0, &work.delta, &mut tw0);
+            at(t1, &mut q);
+            chain.fk(&q, &mut f1);
+            body.place(&f1, &mut p1);
+            twists(&bounds, &f1, &work.delta, &mut tw1);
+            let span = t1 - t0;
+            for qb in 0..body.segments() {
+                let lq = body.level(qb);
+                let from = rng.random_range(0..=lq);
+                let plain = work.relative(dof, qb, from);
+                let accel = work.accel(dof, qb, from);
+                let u0 = speed(&body, &f0, &p0, qb, &tw0[lq].minus(&tw0[from]));
+                let u1 = speed(&body, &f1, &p1, qb, &tw1[lq].minus(&tw1[from]));
+                let bound = motion(span, plain, u0, u1, accel);
+                assert!(bound <= span * plain + 1e-12);
+                cases += 1;
+                if bound < 0.5 * span * plain {
+                    tight += 1;
+                }
+                // Relative motion: the axes before `from` held still; the bound covers the
                 // length of the path each end point travels.
-                let mut prev = fa.segments[qb];
+                let mut prev = f0.segments[qb];
                 let mut travelled = [0.0; 2];
-                for k in 1..=200 {
-                    let t = span * k as f64 / 200.0;
+                let steps = 400;
+                for k in 1..=steps {
+                    let tau = span * k as f64 / steps as f64;
                     for j in 0..dof {
-                        q[j] = if j < from {
-                            a[j]
-                        } else {
-                            a[j] + t * (b[j] - a[j])
-                        };
+                        let t = if j < from { t0 } else { t0 + tau };
+                        q[j] = a[j] + t * work.delta[j];
                     }
                     chain.fk(&q, &mut ft);
-                    body.place(&ft, &mut pt);
                     for e in 0..2 {
                         travelled[e] += (ft.segments[qb][e] - prev[e]).norm();
+                        let ramp = u0 * tau + 0.5 * accel * tau * tau;
                         assert!(
-                            travelled[e] <= t * bound + 1e-9,
-                            "body {qb} travelled {} > {t} × {bound}",
+                            travelled[e] <= ramp + 1e-9,
+                            "body {qb}: travelled {} > ramp {ramp} at τ = {tau}",
                             travelled[e]
                         );
                     }
                     prev = ft.segments[qb];
                 }
+                for e in travelled {
+                    assert!(
+                        e <= bound + 1e-9,
+                        "body {qb} travelled {e} > bound {bound} over {span}"
+                    );
+                }
             }
         }
         assert!(
-            tightened > 100,
-            "the lever arms tightened only {tightened} bounds"
+            tight * 4 > cases,
+            "the speeds halved only {tight} of {cases} bounds"
         );
+    }
+
+    /// The motion integral: exact for constant speed, symmetric, capped by `s·reach`, and the
+    /// integral of the lower ramp where one end is much faster.
+    #[test]
+    fn motion_integral_cases() {
+        assert!((motion(2.0, 10.0, 1.0, 1.0, 0.0) - 2.0).abs() < 1e-9);
+        assert!((motion(1.0, 10.0, 0.5, 3.0, 0.0) - 0.5).abs() < 1e-9);
+        let (x, y) = (
+            motion(0.5, 10.0, 0.2, 0.7, 3.0),
+            motion(0.5, 10.0, 0.7, 0.2, 3.0),
+        );
+        assert!((x - y).abs() < 1e-12);
+        assert_eq!(motion(1.0, 0.1, 1.0, 1.0, 5.0), 0.1);
+        // u1 far above the ramp from u0: the integral of u0 + a·τ.
+        let m = motion(1.0, 100.0, 0.0, 50.0, 2.0);
+        assert!((m - 1.0).abs() < 1e-9, "{m}");
+        // Equal end speeds: the two ramps meet in the middle.
+        let m = motion(2.0, 100.0, 1.0, 1.0, 1.0);
+        assert!((m - (2.0 + 2.0 * 0.5 * 1.0)).abs() < 1e-9, "{m}");
     }
 }
