@@ -360,26 +360,23 @@ impl EdgeChecker for Certified {
         // body. c0 > D proves the whole step; otherwise c1 > D − c0 does.
         for b in 0..body.len() {
             let plain = work.reach[b];
+            let level = body.level(b);
+            let accel = work.accel(dof, b, 0);
+            let u0 = speed(body, fa, pa, b, &work.twist_a[level]);
+            let u1 = speed(body, fb, pb, b, &work.twist_b[level]);
+            let bound = motion(1.0, plain, u0, u1, accel);
             let (c0, hint) = body.clearance(
                 scene,
                 fa,
                 pa,
                 b,
                 &work.balls_a[b],
-                plain + CAP_MARGIN,
+                bound + CAP_MARGIN,
                 u32::MAX,
             );
             if c0 <= 0.0 {
                 return false;
             }
-            if c0 > plain {
-                continue;
-            }
-            let level = body.level(b);
-            let accel = work.accel(dof, b, 0);
-            let u0 = speed(body, fa, pa, b, &work.twist_a[level]);
-            let u1 = speed(body, fb, pb, b, &work.twist_b[level]);
-            let bound = motion(1.0, plain, u0, u1, accel);
             if c0 > bound {
                 continue;
             }
@@ -417,6 +414,10 @@ impl EdgeChecker for Certified {
             if ball0 > plain {
                 continue;
             }
+            let ball1 = ball(&work.balls_b);
+            if ball0 + ball1 > plain {
+                continue;
+            }
             let lq = body.level(qb);
             let accel = work.accel(dof, qb, level);
             let u0 = speed(
@@ -434,7 +435,7 @@ impl EdgeChecker for Certified {
                 &work.twist_b[lq].minus(&work.twist_b[level]),
             );
             let bound = motion(1.0, plain, u0, u1, accel);
-            if ball0 > bound || ball0 + ball(&work.balls_b) > bound {
+            if ball0 > bound || ball0 + ball1 > bound {
                 continue;
             }
             let c0 = body.pair_distance(fa, pa, p, qb);
