@@ -41,10 +41,13 @@ pub struct CollisionScene {
     bounds: Vec<(Point3<f64>, f64)>,
     bvh: Bvh,
     clearance: f64,
+    /// Few obstacles, all with closed-form distances: searched by one linear pass.
+    linear: bool,
 }
 
-/// Scenes with at most this many obstacles are searched by one pass over their bounding
-/// spheres in [`CollisionScene::nearest`] instead of through the hierarchy.
+/// Scenes with at most this many obstacles, all spheres or capsules, are searched by one pass
+/// over their bounding spheres in [`CollisionScene::nearest`] instead of through the hierarchy
+/// (a mesh's distance costs too much to leave to its bounding sphere's pruning).
 const LINEAR_SCAN: usize = 48;
 
 /// Squared distance from `p` to the bounding box of a hierarchy node (0 inside).
@@ -87,12 +90,15 @@ impl CollisionScene {
                 _ => Exact::General,
             });
         }
+        let linear =
+            obstacles.len() <= LINEAR_SCAN && exact.iter().all(|e| !matches!(e, Exact::General));
         CollisionScene {
             obstacles,
             exact,
             bounds,
             bvh,
             clearance: workspace.clearance,
+            linear,
         }
     }
 
@@ -161,7 +167,7 @@ impl CollisionScene {
         if self.obstacles.is_empty() || cap.is_nan() {
             return (cap, u32::MAX);
         }
-        if self.obstacles.len() <= LINEAR_SCAN {
+        if self.linear {
             // Few obstacles: one pass over their bounding spheres beats the hierarchy.
             let (mut best, mut nearest) = (cap, u32::MAX);
             for (k, (c, r)) in self.bounds.iter().enumerate() {
