@@ -205,6 +205,21 @@ fn speed(body: &RobotBody, frames: &Frames, placed: &Placed, b: usize, t: &Twist
     }
 }
 
+/// Largest speed of a point of body `q` relative to the link moved by the first `level` axes,
+/// from the prefix sums of the twists (`twists`, see [`twists`]) at one configuration.
+#[inline(always)]
+fn relative_speed(
+    body: &RobotBody,
+    frames: &Frames,
+    placed: &Placed,
+    twists: &[Twist],
+    q: usize,
+    level: usize,
+) -> f64 {
+    let t = twists[body.level(q)].minus(&twists[level]);
+    speed(body, frames, placed, q, &t)
+}
+
 /// Reused buffers of the certified checker (inside [`Scratch`]).
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Work {
@@ -418,22 +433,9 @@ impl EdgeChecker for Certified {
             if ball0 + ball1 > plain {
                 continue;
             }
-            let lq = body.level(qb);
             let accel = work.accel(dof, qb, level);
-            let u0 = speed(
-                body,
-                fa,
-                pa,
-                qb,
-                &work.twist_a[lq].minus(&work.twist_a[level]),
-            );
-            let u1 = speed(
-                body,
-                fb,
-                pb,
-                qb,
-                &work.twist_b[lq].minus(&work.twist_b[level]),
-            );
+            let u0 = relative_speed(body, fa, pa, &work.twist_a, qb, level);
+            let u1 = relative_speed(body, fb, pb, &work.twist_b, qb, level);
             let bound = motion(1.0, plain, u0, u1, accel);
             if ball0 > bound || ball0 + ball1 > bound {
                 continue;
