@@ -280,16 +280,28 @@ mod tests {
     use crate::Scenario;
     use proptest::prelude::*;
 
-    fn scene() -> CollisionScene {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("examples/scenarios/paper-3d.toml");
-        CollisionScene::new(&Scenario::load(&path).unwrap().workspace)
+    /// The bundled scenes of 32 spheres (searched by the linear pass) and of meshes (through
+    /// the hierarchy), loaded once.
+    fn scenes() -> &'static [CollisionScene; 2] {
+        static SCENES: std::sync::OnceLock<[CollisionScene; 2]> = std::sync::OnceLock::new();
+        SCENES.get_or_init(|| {
+            let load = |name: &str| {
+                let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                    .join("examples/scenarios")
+                    .join(name);
+                CollisionScene::new(&Scenario::load(&path).unwrap().workspace)
+            };
+            let scenes = [load("paper-3d.toml"), load("pipework.toml")];
+            assert!(scenes[0].linear && !scenes[1].linear);
+            scenes
+        })
     }
 
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(300))]
 
-        /// The hierarchy's answers equal a brute-force scan over every obstacle.
+        /// The broad phase's answers (linear pass or hierarchy) equal a brute-force scan over
+        /// every obstacle.
         #[test]
         fn near_and_nearest_match_brute_force(
             a in prop::array::uniform3(-2.5f64..2.5),
@@ -298,7 +310,7 @@ mod tests {
             margin in 0.0f64..1.0,
             cap in 0.0f64..3.0,
         ) {
-            let s = scene();
+            for s in scenes() {
             let (a, b) = (Point3::from(a), Point3::from(b));
             let center = nalgebra::center(&a, &b);
             let radius = 0.5 * (b - a).norm() + r;
@@ -328,6 +340,7 @@ mod tests {
                 prop_assert!((s.distance(k as usize, &a, &b, r) - brute).abs() < 1e-12);
             } else {
                 prop_assert_eq!(k, u32::MAX);
+            }
             }
         }
     }
