@@ -66,15 +66,8 @@ impl MotionBounds {
         }
     }
 
-    /// Bound on how far any point of body `b` moves for the step `delta`.
-    #[inline]
-    pub fn displacement(&self, b: usize, delta: &[f64]) -> f64 {
-        let row = &self.w[b * self.dof..(b + 1) * self.dof];
-        row.iter().zip(delta).map(|(w, d)| w * d.abs()).sum()
-    }
-
     /// Bound on how far body `q` moves relative to a body moved by the first `from_level`
-    /// free axes only, for the step `delta`.
+    /// free axes only, for the step `delta` (from level 0: how far any point of it moves).
     #[inline]
     pub fn relative(&self, q: usize, from_level: usize, delta: &[f64]) -> f64 {
         let row = &self.w[q * self.dof..(q + 1) * self.dof];
@@ -83,21 +76,6 @@ impl MotionBounds {
             .zip(&delta[from_level.min(self.dof)..])
             .map(|(w, d)| w * d.abs())
             .sum()
-    }
-
-    /// Writes, for body `b` and the step `delta`, the suffix sums `Σ_{j ≥ i} w_bj·|Δa_j|` for
-    /// `i = 0 … dof` to `out` (appended; `dof + 1` values, the last 0): entry 0 is
-    /// [`MotionBounds::displacement`] and entry `i` is [`MotionBounds::relative`] from level `i`.
-    #[inline]
-    pub fn suffix_sums(&self, b: usize, delta: &[f64], out: &mut Vec<f64>) {
-        let row = &self.w[b * self.dof..(b + 1) * self.dof];
-        let start = out.len();
-        out.resize(start + self.dof + 1, 0.0);
-        let mut acc = 0.0;
-        for j in (0..self.dof).rev() {
-            acc += row[j] * delta[j].abs();
-            out[start + j] = acc;
-        }
     }
 
     /// The factors `w_bj` of body `b`, one per free axis (0 for the axes that do not move it).

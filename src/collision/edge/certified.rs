@@ -225,7 +225,8 @@ fn relative_speed(
 pub(crate) struct Work {
     pub(crate) delta: Vec<f64>,
     pub(crate) reach: Vec<f64>,
-    /// Per body, the `dof + 1` suffix sums of its motion bound ([`MotionBounds::suffix_sums`]).
+    /// Per body, the `dof + 1` suffix sums `Σ_{j ≥ i} w_bj·|Δa_j|` of its motion bound (entry `i`
+    /// is [`MotionBounds::relative`] from level `i`).
     suffix: Vec<f64>,
     /// Per body and level `l` (`dof + 1` entries): the bound on how fast the body's speed
     /// relative to a body of level `l` changes along the edge.
@@ -619,6 +620,7 @@ mod tests {
                 let lq = body.level(qb);
                 let from = rng.random_range(0..=lq);
                 let plain = work.relative(dof, qb, from);
+                assert!((plain - bounds.relative(qb, from, &work.delta)).abs() < 1e-12);
                 let accel = work.accel(dof, qb, from);
                 let u0 = speed(&body, &f0, &p0, qb, &tw0[lq].minus(&tw0[from]));
                 let u1 = speed(&body, &f1, &p1, qb, &tw1[lq].minus(&tw1[from]));
