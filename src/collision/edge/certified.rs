@@ -163,9 +163,10 @@ impl Twist {
         }
     }
 
+    /// The velocity of the point `x`.
     #[inline]
-    fn speed_at(&self, x: &Point3<f64>) -> f64 {
-        (self.v + self.w.cross(&x.coords)).norm()
+    fn velocity(&self, x: &Point3<f64>) -> Vector3<f64> {
+        self.v + self.w.cross(&x.coords)
     }
 }
 
@@ -197,11 +198,10 @@ fn speed(body: &RobotBody, frames: &Frames, placed: &Placed, b: usize, t: &Twist
     let ns = body.segments();
     if b < ns {
         let [p0, p1] = &frames.segments[b];
-        let v0 = t.v + t.w.cross(&p0.coords);
-        let v1 = t.v + t.w.cross(&p1.coords);
+        let (v0, v1) = (t.velocity(p0), t.velocity(p1));
         v0.norm_squared().max(v1.norm_squared()).sqrt()
     } else {
-        t.speed_at(&placed.centers[b - ns]) + t.w.norm() * body.solids()[b - ns].radius
+        t.velocity(&placed.centers[b - ns]).norm() + t.w.norm() * body.solids()[b - ns].radius
     }
 }
 
@@ -224,7 +224,6 @@ fn relative_speed(
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Work {
     pub(crate) delta: Vec<f64>,
-    pub(crate) reach: Vec<f64>,
     /// Per body, the `dof + 1` suffix sums `Σ_{j ≥ i} w_bj·|Δa_j|` of its motion bound (entry `i`
     /// is [`MotionBounds::relative`] from level `i`).
     suffix: Vec<f64>,
@@ -244,8 +243,8 @@ pub(crate) struct Work {
 }
 
 impl Work {
-    /// Fills `delta` with `to − from`, `reach` with each body's displacement bound for the
-    /// whole step, the suffix sums and the acceleration bounds.
+    /// Fills `delta` with `to − from`, and per body the suffix sums of its motion bound and
+    /// the acceleration bounds.
     pub(crate) fn prepare(
         &mut self,
         bounds: &MotionBounds,
@@ -268,7 +267,6 @@ impl Work {
             self.omega.push(omega);
         }
         let n = bounds.bodies();
-        self.reach.clear();
         self.suffix.clear();
         self.suffix.resize(n * stride, 0.0);
         self.accel.clear();
@@ -295,13 +293,13 @@ impl Work {
                 let a = (g - omega_j * sum).max(0.0) + h;
                 accel[j] = a * (1.0 + 1e-9) + 1e-12;
             }
-            self.reach.push(suffix[0]);
         }
     }
 
-    /// Bound on how far body `q` moves relative to bodies moved by the first `level` axes.
+    /// Bound on how far body `q` moves over the whole step relative to bodies moved by the
+    /// first `level` axes (level 0: how far it moves), as [`MotionBounds::relative`].
     #[inline]
-    fn relative(&self, dof: usize, q: usize, level: usize) -> f64 {
+    pub(crate) fn relative(&self, dof: usize, q: usize, level: usize) -> f64 {
         self.suffix[q * (dof + 1) + level.min(dof)]
     }
 
@@ -375,7 +373,7 @@ impl EdgeChecker for Certified {
         // Each body against the environment: c(t) = clearance − ε moves no faster than the
         // body. c0 > D proves the whole step; otherwise c1 > D − c0 does.
         for b in 0..body.len() {
-            let plain = work.reach[b];
+            let plain = work.relative(dof, b, 0);
             let level = body.level(b);
             let accel = work.accel(dof, b, 0);
             let u0 = speed(body, fa, pa, b, &work.twist_a[level]);
