@@ -216,3 +216,33 @@ fn certified_has_no_false_free_edge_on_a_mesh_scene() {
         .any(|o| matches!(o.geometry, kinsynth::world::ObstacleShape::Mesh { .. })));
     check_certified_against_oracle(&s, 2000, 23);
 }
+
+/// A checker that says it checks a step's end ([`EdgeChecker::edge_checks_end`], so that the
+/// planner skips the node check there) never passes a step whose end is blocked. `segment`
+/// does not say so, and indeed passes such steps: the check can fail.
+#[test]
+fn a_checker_that_checks_the_end_never_passes_a_blocked_end() {
+    let s = Scenario::from_spec(&generate(Preset::Paper3d, 2)).unwrap();
+    let chain = s.space.largest().chain();
+    let scene = Arc::new(CollisionScene::new(&s.workspace));
+    let body = kinsynth::collision::RobotBody::of_chain(&chain);
+    let edges = sample_edges(&scene, &chain, &body, PI / 4.0, s.planner.lambda, 1500, 5);
+    for kind in CheckerKind::ALL {
+        let c = make_checker(kind, scene.clone(), BodyModel::Capsules);
+        let mut scratch = Scratch::new(&chain);
+        let (mut blocked_ends, mut passed) = (0, 0);
+        for (a, b) in &edges {
+            if c.node_free(&chain, b, &mut scratch) {
+                continue;
+            }
+            blocked_ends += 1;
+            passed += usize::from(c.edge_free(&chain, a, b, &mut scratch));
+        }
+        assert!(blocked_ends >= 50, "{kind}: {blocked_ends} blocked ends");
+        if c.edge_checks_end() {
+            assert_eq!(passed, 0, "{kind} passed {passed} steps with a blocked end");
+        } else if kind == CheckerKind::Segment {
+            assert!(passed > 0, "segment checked every end after all");
+        }
+    }
+}

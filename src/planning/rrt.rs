@@ -391,7 +391,10 @@ impl<'a> Rrt<'a> {
                 Step::Blocked
             };
         }
-        if !self.checker.node_free(self.chain, &work.q_new, scratch)
+        // A checker that proves the whole step (its end included) needs no separate node
+        // check of the end: the decision is the same.
+        if (!self.checker.edge_checks_end()
+            && !self.checker.node_free(self.chain, &work.q_new, scratch))
             || !self
                 .checker
                 .edge_free(self.chain, tree.config(near), &work.q_new, scratch)
@@ -629,7 +632,8 @@ impl<'a> Rrt<'a> {
     /// backward trees (up to `postures` per task). Otherwise it is an exploration one: a uniform
     /// sample that the forward tree, or every other time a backward tree, grows toward, and a
     /// greedy attempt of the other side to join the new node; a join grafts the backward tree
-    /// onto the forward one. Every new node passes `node_free` and every new edge `edge_free`.
+    /// onto the forward one. Every new edge passes `edge_free`, and every new node `node_free`
+    /// (unless the checker proves a step's end with the step, [`EdgeChecker::edge_checks_end`]).
     /// Deterministic for a given `rng` state.
     pub fn grow(&self, rng: &mut ChaCha8Rng, scratch: &mut Scratch) -> Growth {
         let chain = self.chain;

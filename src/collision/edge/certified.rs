@@ -338,6 +338,10 @@ impl EdgeChecker for Certified {
         super::node_free_with(&self.scene, BodyModel::Capsules, chain, a, scratch)
     }
 
+    fn edge_checks_end(&self) -> bool {
+        true // a free answer is a proof over the whole step, its end included
+    }
+
     fn edge_free(&self, chain: &Chain, from: &[f64], to: &[f64], scratch: &mut Scratch) -> bool {
         scratch.stats.edges += 1;
         let scene = &*self.scene;

@@ -154,6 +154,12 @@ pub trait EdgeChecker: Send + Sync {
     /// True when the motion `a(t) = from + t·(to − from)`, `t ∈ [0, 1]`, is judged free. The
     /// start `from` is assumed to have passed [`EdgeChecker::node_free`].
     fn edge_free(&self, chain: &Chain, from: &[f64], to: &[f64], scratch: &mut Scratch) -> bool;
+    /// True when [`EdgeChecker::edge_free`] answers "free" only if the end configuration `to`
+    /// is free as well (the whole motion, end included, is checked), so that a planner need
+    /// not call [`EdgeChecker::node_free`] on a step's end before checking the step.
+    fn edge_checks_end(&self) -> bool {
+        false
+    }
 }
 
 /// Node check shared by the strategies: the body model at `a`, using `scratch.fa`.
