@@ -5,6 +5,7 @@
 pub mod body;
 pub mod distance;
 pub mod edge;
+pub mod hull;
 pub mod oracle;
 pub mod scene;
 

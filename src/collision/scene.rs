@@ -4,13 +4,15 @@
 //! the body cost, not what all of them cost.
 
 use super::distance::{point_segment, segment_segment};
+use super::hull::ClimbingHull;
 use crate::world::convert::{from_parry_point, to_parry_point};
 use crate::world::{Obstacle, ObstacleShape, Workspace};
 use nalgebra::Point3;
 use parry3d_f64::math::Pose;
 use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy, BvhNode, TraversalAction};
 use parry3d_f64::query;
-use parry3d_f64::shape::{Ball, Segment};
+use parry3d_f64::shape::{Ball, Segment, SharedShape};
+use std::sync::Arc;
 
 /// How the distance to one obstacle is computed.
 #[derive(Clone, Debug)]
@@ -23,8 +25,48 @@ enum Exact {
         b: Point3<f64>,
         radius: f64,
     },
+    /// A convex hull, through its vertex graph ([`ClimbingHull`]), at its world pose.
+    Hull { pose: Pose, hull: Arc<ClimbingHull> },
+    /// A convex decomposition: the distance to the nearest part.
+    Parts(Arc<[Part]>),
     /// parry's distance query on the obstacle's shape.
     General,
+}
+
+/// One convex part of a decomposition, at its world pose, with its bounding sphere.
+#[derive(Clone, Debug)]
+struct Part {
+    pose: Pose,
+    hull: ClimbingHull,
+    center: Point3<f64>,
+    radius: f64,
+}
+
+/// The convex hull or the convex parts of a shape, when it is one ([`Exact::Hull`],
+/// [`Exact::Parts`]); `None` otherwise, or when a part is not a convex polyhedron.
+fn climbing(shape: &SharedShape, pose: &Pose) -> Option<Exact> {
+    if let Some(poly) = shape.as_convex_polyhedron() {
+        return Some(Exact::Hull {
+            pose: *pose,
+            hull: Arc::new(ClimbingHull::new(poly)?),
+        });
+    }
+    let compound = shape.as_compound()?;
+    let parts = compound
+        .shapes()
+        .iter()
+        .map(|(local, part)| {
+            let world = *pose * *local;
+            let bs = part.compute_bounding_sphere(&world);
+            Some(Part {
+                pose: world,
+                hull: ClimbingHull::new(part.as_convex_polyhedron()?)?,
+                center: from_parry_point(bs.center()),
+                radius: bs.radius(),
+            })
+        })
+        .collect::<Option<Vec<_>>>()?;
+    Some(Exact::Parts(parts.into()))
 }
 
 /// Obstacles, clearance, a per-obstacle bounding sphere and a hierarchy of their bounding boxes
@@ -87,11 +129,13 @@ impl CollisionScene {
                         radius,
                     }
                 }
-                _ => Exact::General,
+                _ => climbing(o.shape(), o.pose()).unwrap_or(Exact::General),
             });
         }
-        let linear =
-            obstacles.len() <= LINEAR_SCAN && exact.iter().all(|e| !matches!(e, Exact::General));
+        let linear = obstacles.len() <= LINEAR_SCAN
+            && exact
+                .iter()
+                .all(|e| matches!(e, Exact::Sphere { .. } | Exact::Capsule { .. }));
         CollisionScene {
             obstacles,
             exact,
@@ -220,6 +264,19 @@ impl CollisionScene {
                 b: q,
                 radius: r,
             } => segment_segment(a, b, p, q) - r - radius,
+            Exact::Hull { pose, hull } => (hull.segment_distance(pose, a, b) - radius).max(0.0),
+            Exact::Parts(parts) => {
+                let mut best = f64::INFINITY;
+                for part in parts.iter() {
+                    // The part's bounding sphere bounds its distance from below.
+                    if point_segment(&part.center, a, b) - part.radius - radius >= best {
+                        continue;
+                    }
+                    let d = (part.hull.segment_distance(&part.pose, a, b) - radius).max(0.0);
+                    best = best.min(d);
+                }
+                best
+            }
             Exact::General => {
                 let o = &self.obstacles[k];
                 let d = if a == b {
@@ -343,5 +400,33 @@ mod tests {
             }
             }
         }
+
+        /// The hull and decomposition fast paths ([`ClimbingHull`]) give parry's distances on
+        /// the obstacles' own shapes (the pipework vessel hull and pipe-bundle parts).
+        #[test]
+        fn hull_and_parts_match_parry(
+            a in prop::array::uniform3(-1.5f64..1.5),
+            d in prop::array::uniform3(-0.4f64..0.4),
+            r in 0.0f64..0.1,
+        ) {
+            let s = &scenes()[1];
+            let a = Point3::new(a[0] + 1.0, a[1], a[2] + 0.8);
+            let b = a + nalgebra::Vector3::from(d);
+            for (k, o) in s.obstacles.iter().enumerate() {
+                let seg = Segment::new(to_parry_point(&a), to_parry_point(&b));
+                let want = query::distance(&Pose::IDENTITY, &seg, o.pose(), o.shape().as_ref())
+                    .map_or(0.0, |d| (d.distance - r).max(0.0));
+                let got = s.distance(k, &a, &b, r);
+                prop_assert!((got - want).abs() <= 1e-9 * (1.0 + want), "obstacle {k}: {got} vs {want}");
+            }
+        }
+    }
+
+    /// The pipework scene uses both fast paths.
+    #[test]
+    fn pipework_meshes_take_the_fast_paths() {
+        let s = &scenes()[1];
+        assert!(matches!(s.exact[0], Exact::Hull { .. }));
+        assert!(matches!(&s.exact[1], Exact::Parts(p) if p.len() == 9));
     }
 }
