@@ -13,7 +13,7 @@
 
 use nalgebra::Point3;
 use parry3d_f64::math::{Pose, Vector};
-use parry3d_f64::query::details::distance_support_map_support_map;
+use parry3d_f64::query::gjk::{self, CsoPoint, GJKResult, VoronoiSimplex};
 use parry3d_f64::shape::{ConvexPolyhedron, Segment, SupportMap};
 
 /// Cells per side of each face of the cube map that picks the climb's start vertex.
@@ -129,9 +129,40 @@ impl ClimbingHull {
     /// `pose` (0 when they touch or overlap).
     #[inline]
     pub fn segment_distance(&self, pose: &Pose, a: &Point3<f64>, b: &Point3<f64>) -> f64 {
+        self.segment_distance_below(pose, a, b, f64::MAX)
+            .unwrap_or(0.0)
+    }
+
+    /// As [`ClimbingHull::segment_distance`] when the distance is below `max`; otherwise
+    /// `None` (GJK stops as soon as it proves the distance larger). Below `max` the answer is
+    /// the one without the limit, bit for bit (the iterations are the same).
+    #[inline]
+    pub fn segment_distance_below(
+        &self,
+        pose: &Pose,
+        a: &Point3<f64>,
+        b: &Point3<f64>,
+        max: f64,
+    ) -> Option<f64> {
         let to = |p: &Point3<f64>| Vector::new(p.x, p.y, p.z);
         let seg = Segment::new(to(a), to(b));
-        distance_support_map_support_map(pose, &seg, self)
+        // parry's `distance_support_map_support_map`, with the limit passed on to GJK.
+        let dir = -pose.translation;
+        let eps = parry3d_f64::math::DEFAULT_EPSILON;
+        let dir = if dir.length_squared() > eps * eps {
+            dir.normalize()
+        } else {
+            Vector::X
+        };
+        let mut simplex = VoronoiSimplex::new();
+        simplex.reset(CsoPoint::from_shapes(pose, &seg, self, dir));
+        match gjk::closest_points(pose, &seg, self, max, true, &mut simplex) {
+            GJKResult::Intersection => Some(0.0),
+            GJKResult::ClosestPoints(p1, p2, _) => Some((p1 - p2).length()),
+            GJKResult::NoIntersection(_) if max < f64::MAX => None,
+            // As parry: GJK did not converge.
+            GJKResult::NoIntersection(_) | GJKResult::Proximity(_) => Some(0.0),
+        }
     }
 }
 

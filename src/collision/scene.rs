@@ -192,8 +192,9 @@ impl CollisionScene {
         });
     }
 
-    /// `(min(cap, min_k dist(k)), nearest)` over the obstacles `k`, where `dist(k)` is a
-    /// distance from a body inside the ball (`center`, `radius`) to obstacle `k`: a best-first
+    /// `(min(cap, min_k dist(k)), nearest)` over the obstacles `k`, where `dist(k, c)` is a
+    /// distance from a body inside the ball (`center`, `radius`) to obstacle `k`, exact when
+    /// below `c` and otherwise any value `≥ c` (see [`CollisionScene::distance_below`]): a best-first
     /// search of the hierarchy that skips every obstacle whose bounding box is farther from the
     /// ball than the best distance so far. The distance is exact when it is below `cap`, and a
     /// lower bound of every obstacle's distance in any case; `nearest` is the obstacle found
@@ -206,7 +207,7 @@ impl CollisionScene {
         radius: f64,
         cap: f64,
         skip: u32,
-        dist: impl Fn(usize) -> f64,
+        dist: impl Fn(usize, f64) -> f64,
     ) -> (f64, u32) {
         if self.obstacles.is_empty() || cap.is_nan() {
             return (cap, u32::MAX);
@@ -220,7 +221,7 @@ impl CollisionScene {
                 {
                     continue;
                 }
-                let d = dist(k);
+                let d = dist(k, best);
                 if d < best {
                     best = d;
                     nearest = k as u32;
@@ -239,7 +240,7 @@ impl CollisionScene {
             if (c - center).norm() - r - radius >= best {
                 return None;
             }
-            Some(dist(k))
+            Some(dist(k, best))
         };
         self.bvh
             .find_best(cap, box_cost, leaf_cost)
@@ -291,6 +292,42 @@ impl CollisionScene {
                 };
                 d
             }
+        }
+    }
+
+    /// [`CollisionScene::distance`] when it is below `cap`; otherwise some value `≥ cap`. The
+    /// convex hulls and decompositions stop their GJK iterations once the distance is proven
+    /// larger; below `cap` the value is [`CollisionScene::distance`]'s, bit for bit.
+    #[inline]
+    pub fn distance_below(
+        &self,
+        k: usize,
+        a: &Point3<f64>,
+        b: &Point3<f64>,
+        radius: f64,
+        cap: f64,
+    ) -> f64 {
+        match &self.exact[k] {
+            Exact::Hull { pose, hull } => hull
+                .segment_distance_below(pose, a, b, cap + radius)
+                .map_or(cap, |d| (d - radius).max(0.0)),
+            Exact::Parts(parts) => {
+                let mut best = f64::INFINITY;
+                for part in parts.iter() {
+                    let limit = best.min(cap);
+                    if point_segment(&part.center, a, b) - part.radius - radius >= limit {
+                        continue;
+                    }
+                    if let Some(d) =
+                        part.hull
+                            .segment_distance_below(&part.pose, a, b, limit + radius)
+                    {
+                        best = best.min((d - radius).max(0.0));
+                    }
+                }
+                best
+            }
+            _ => self.distance(k, a, b, radius),
         }
     }
 
@@ -391,7 +428,7 @@ mod tests {
                 }
             }
             let brute = (0..s.len()).map(|k| s.distance(k, &a, &b, r)).fold(f64::INFINITY, f64::min);
-            let (d, k) = s.nearest(&center, radius, cap, u32::MAX, |k| s.distance(k, &a, &b, r));
+            let (d, k) = s.nearest(&center, radius, cap, u32::MAX, |k, c| s.distance_below(k, &a, &b, r, c));
             prop_assert!((d - brute.min(cap)).abs() < 1e-12, "{d} vs {brute} (cap {cap})");
             if brute < cap {
                 prop_assert!((s.distance(k as usize, &a, &b, r) - brute).abs() < 1e-12);

@@ -258,6 +258,26 @@ impl RobotBody {
         }
     }
 
+    /// [`RobotBody::obstacle_distance`] when it is below `cap`, otherwise some value `≥ cap`
+    /// ([`CollisionScene::distance_below`]).
+    #[inline]
+    pub fn obstacle_distance_below(
+        &self,
+        scene: &CollisionScene,
+        frames: &Frames,
+        placed: &Placed,
+        b: usize,
+        k: usize,
+        cap: f64,
+    ) -> f64 {
+        if b < self.radii.len() {
+            let [p, q] = &frames.segments[b];
+            scene.distance_below(k, p, q, self.radii[b], cap)
+        } else {
+            self.obstacle_distance(scene, frames, placed, b, k)
+        }
+    }
+
     /// Bounding balls of every body at one configuration, written to `out` (cleared first).
     #[inline]
     pub fn balls(&self, frames: &Frames, placed: &Placed, out: &mut Vec<(Point3<f64>, f64)>) {
@@ -293,8 +313,8 @@ impl RobotBody {
                 best = hint;
             }
         }
-        let (d, k) = scene.nearest(&ball.0, ball.1, cap, hint, |k| {
-            self.obstacle_distance(scene, frames, placed, b, k)
+        let (d, k) = scene.nearest(&ball.0, ball.1, cap, hint, |k, below| {
+            self.obstacle_distance_below(scene, frames, placed, b, k, below)
         });
         (d - eps, if k == u32::MAX { best } else { k })
     }
