@@ -102,6 +102,102 @@ pub fn segment_segment(
     segment_segment_squared(p1, q1, p2, q2).sqrt()
 }
 
+/// Squared distance from `p` to the triangle `a`, `b`, `c` (Ericson, *Real-Time Collision
+/// Detection*, §5.1.5: the closest point by Voronoi regions). A degenerate triangle falls back
+/// to its edges.
+#[inline]
+pub fn point_triangle_squared(
+    p: &Point3<f64>,
+    a: &Point3<f64>,
+    b: &Point3<f64>,
+    c: &Point3<f64>,
+) -> f64 {
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(&ap), ac.dot(&ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return ap.norm_squared();
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(&bp), ac.dot(&bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return bp.norm_squared();
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        let v = d1 / (d1 - d3);
+        return (ap - ab * v).norm_squared();
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(&cp), ac.dot(&cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return cp.norm_squared();
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        let w = d2 / (d2 - d6);
+        return (ap - ac * w).norm_squared();
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return (bp - (c - b) * w).norm_squared();
+    }
+    let sum = va + vb + vc;
+    if sum.is_nan() || sum.abs() <= f64::MIN_POSITIVE || !sum.is_finite() {
+        // Degenerate (collinear or repeated corners): the nearest edge.
+        return point_segment(p, a, b)
+            .min(point_segment(p, b, c))
+            .min(point_segment(p, c, a))
+            .powi(2);
+    }
+    let (v, w) = (vb / sum, vc / sum);
+    (ap - ab * v - ac * w).norm_squared()
+}
+
+/// True when the segment `p`–`q` meets the triangle `a`, `b`, `c` (both closed).
+#[inline]
+fn segment_crosses_triangle(
+    p: &Point3<f64>,
+    q: &Point3<f64>,
+    a: &Point3<f64>,
+    b: &Point3<f64>,
+    c: &Point3<f64>,
+) -> bool {
+    let n = (b - a).cross(&(c - a));
+    let (sp, sq) = (n.dot(&(p - a)), n.dot(&(q - a)));
+    if (sp > 0.0 && sq > 0.0) || (sp < 0.0 && sq < 0.0) || sp == sq {
+        // Both ends strictly on one side, or the segment parallel to (or in) the plane: any
+        // contact is then at an end point or with an edge, which the distance covers.
+        return false;
+    }
+    let t = sp / (sp - sq);
+    let x = p + (q - p) * t;
+    let inside = |u: &Point3<f64>, v: &Point3<f64>| n.dot(&(v - u).cross(&(x - u))) >= 0.0;
+    inside(a, b) && inside(b, c) && inside(c, a)
+}
+
+/// Distance between the segment `p`–`q` and the triangle `a`, `b`, `c`: 0 when they meet,
+/// otherwise the smallest of the end points' distances to the triangle and the segment's
+/// distances to the three edges (where a disjoint segment and triangle come closest).
+#[inline]
+pub fn segment_triangle(
+    p: &Point3<f64>,
+    q: &Point3<f64>,
+    a: &Point3<f64>,
+    b: &Point3<f64>,
+    c: &Point3<f64>,
+) -> f64 {
+    if segment_crosses_triangle(p, q, a, b, c) {
+        return 0.0;
+    }
+    point_triangle_squared(p, a, b, c)
+        .min(point_triangle_squared(q, a, b, c))
+        .min(segment_segment_squared(p, q, a, b))
+        .min(segment_segment_squared(p, q, b, c))
+        .min(segment_segment_squared(p, q, c, a))
+        .sqrt()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -201,6 +297,65 @@ mod tests {
             prop_assert!(exact <= brute + 1e-9, "exact {exact} brute {brute}");
             let h = (q1 - p1).norm() / n as f64;
             prop_assert!(brute - exact <= h + 1e-9, "exact {exact} brute {brute}");
+        }
+    }
+
+    proptest! {
+        /// The point–triangle distance against a dense sample of the triangle, for points
+        /// anywhere and for points just off the triangle's face.
+        #[test]
+        fn point_triangle_matches_brute_force(
+            p in pt(), a in pt(), b in pt(), c in pt(), u in 0.0f64..1.0, v in 0.0f64..1.0,
+            lift in -0.3f64..0.3
+        ) {
+            let n_hat = (b - a).cross(&(c - a)).try_normalize(1e-9);
+            let (u, v) = if u + v > 1.0 { (1.0 - u, 1.0 - v) } else { (u, v) };
+            let over = n_hat.map(|n| a + (b - a) * u + (c - a) * v + n * lift);
+            for x in std::iter::once(p).chain(over) {
+                let exact = point_triangle_squared(&x, &a, &b, &c).sqrt();
+                let n = 60;
+                let mut brute = f64::INFINITY;
+                for j in 0..=n {
+                    for k in 0..=(n - j) {
+                        let t = a + (b - a) * (j as f64 / n as f64) + (c - a) * (k as f64 / n as f64);
+                        brute = brute.min((x - t).norm());
+                    }
+                }
+                prop_assert!(exact <= brute + 1e-9, "exact {exact} brute {brute}");
+                let step = ((b - a).norm() + (c - a).norm()) / n as f64;
+                prop_assert!(brute - exact <= step + 1e-9, "exact {exact} brute {brute}");
+            }
+        }
+
+        /// The segment–triangle distance against a dense sample of both (never above it, and
+        /// within the sampling step of it), and 0 exactly when parry finds them intersecting.
+        #[test]
+        fn segment_triangle_matches_brute_force(
+            p in pt(), q in pt(), a in pt(), b in pt(), c in pt()
+        ) {
+            let exact = segment_triangle(&p, &q, &a, &b, &c);
+            let n = 40;
+            let mut brute = f64::INFINITY;
+            for i in 0..=n {
+                let s = p + (q - p) * (i as f64 / n as f64);
+                for j in 0..=n {
+                    for k in 0..=(n - j) {
+                        let (u, v) = (j as f64 / n as f64, k as f64 / n as f64);
+                        let t = a + (b - a) * u + (c - a) * v;
+                        brute = brute.min((s - t).norm());
+                    }
+                }
+            }
+            prop_assert!(exact <= brute + 1e-9, "exact {exact} brute {brute}");
+            let step = (q - p).norm() / n as f64
+                + ((b - a).norm() + (c - a).norm()) / n as f64;
+            prop_assert!(brute - exact <= step + 1e-9, "exact {exact} brute {brute}");
+            let to = |x: &Point3<f64>| parry3d_f64::math::Vector::new(x.x, x.y, x.z);
+            let seg = parry3d_f64::shape::Segment::new(to(&p), to(&q));
+            let tri = parry3d_f64::shape::Triangle::new(to(&a), to(&b), to(&c));
+            let id = parry3d_f64::math::Pose::IDENTITY;
+            let gjk = parry3d_f64::query::distance(&id, &seg, &id, &tri).unwrap().distance;
+            prop_assert!((gjk - exact).abs() <= 1e-7 * (1.0 + exact), "exact {exact} parry {gjk}");
         }
     }
 

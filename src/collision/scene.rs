@@ -3,7 +3,7 @@
 //! obstacles' bounding boxes) as the broad phase, so that a query costs what the obstacles near
 //! the body cost, not what all of them cost.
 
-use super::distance::{point_segment, segment_segment};
+use super::distance::{point_segment, segment_segment, segment_triangle};
 use super::hull::ClimbingHull;
 use crate::world::convert::{from_parry_point, to_parry_point};
 use crate::world::{Obstacle, ObstacleShape, Workspace};
@@ -29,6 +29,9 @@ enum Exact {
     Hull { pose: Pose, hull: Arc<ClimbingHull> },
     /// A convex decomposition: the distance to the nearest part.
     Parts(Arc<[Part]>),
+    /// A triangle mesh (a surface) at its world pose: a best-first search of its triangle
+    /// hierarchy with the closed-form segment–triangle distance.
+    Mesh { pose: Pose },
     /// parry's distance query on the obstacle's shape.
     General,
 }
@@ -42,9 +45,13 @@ struct Part {
     radius: f64,
 }
 
-/// The convex hull or the convex parts of a shape, when it is one ([`Exact::Hull`],
-/// [`Exact::Parts`]); `None` otherwise, or when a part is not a convex polyhedron.
+/// The fast path of a mesh shape: a triangle mesh ([`Exact::Mesh`]), a convex hull or convex
+/// parts ([`Exact::Hull`], [`Exact::Parts`]); `None` otherwise, or when a part is not a convex
+/// polyhedron.
 fn climbing(shape: &SharedShape, pose: &Pose) -> Option<Exact> {
+    if shape.as_trimesh().is_some() {
+        return Some(Exact::Mesh { pose: *pose });
+    }
     if let Some(poly) = shape.as_convex_polyhedron() {
         return Some(Exact::Hull {
             pose: *pose,
@@ -278,6 +285,7 @@ impl CollisionScene {
                 }
                 best
             }
+            Exact::Mesh { pose } => self.mesh_distance(k, pose, a, b, radius, f64::INFINITY),
             Exact::General => {
                 let o = &self.obstacles[k];
                 let d = if a == b {
@@ -327,7 +335,61 @@ impl CollisionScene {
                 }
                 best
             }
+            Exact::Mesh { pose } => self.mesh_distance(k, pose, a, b, radius, cap),
             _ => self.distance(k, a, b, radius),
+        }
+    }
+
+    /// Distance between the capsule (`a`–`b`, `radius`) and the triangle mesh of obstacle `k`
+    /// placed at `pose`, when below `cap` (otherwise `cap`): the nearest triangle by a
+    /// best-first search of the mesh's hierarchy, each box and triangle bounded from below
+    /// through the segment's bounding ball and bounding box.
+    fn mesh_distance(
+        &self,
+        k: usize,
+        pose: &Pose,
+        a: &Point3<f64>,
+        b: &Point3<f64>,
+        radius: f64,
+        cap: f64,
+    ) -> f64 {
+        let Some(mesh) = self.obstacles[k].shape().as_trimesh() else {
+            return self.distance(k, a, b, radius);
+        };
+        let local =
+            |p: &Point3<f64>| from_parry_point(pose.inverse_transform_point(to_parry_point(p)));
+        let (a, b) = (local(a), local(b));
+        let mid = nalgebra::center(&a, &b);
+        let half = 0.5 * (b - a).norm();
+        let (lo, hi) = (a.inf(&b), a.sup(&b));
+        // The distance between the segment's bounding box and the box `[l, h]`: a lower
+        // bound of the segment's distance to anything inside it.
+        let box_gap = |l: &Point3<f64>, h: &Point3<f64>| {
+            let g = (l - hi).sup(&(lo - h)).sup(&nalgebra::Vector3::zeros());
+            g.norm()
+        };
+        let vertices = mesh.vertices();
+        let indices = mesh.indices();
+        let box_cost = |node: &BvhNode, _best: f64| {
+            let ball = node_distance_squared(node, &mid).sqrt() - half;
+            let (l, h) = (node.mins(), node.maxs());
+            ball.max(box_gap(
+                &Point3::new(l.x, l.y, l.z),
+                &Point3::new(h.x, h.y, h.z),
+            ))
+        };
+        let leaf_cost = |t: u32, best: f64| {
+            let [i, j, l] = indices[t as usize];
+            let v = |i: u32| from_parry_point(vertices[i as usize]);
+            let (p, q, r) = (v(i), v(j), v(l));
+            if box_gap(&p.inf(&q).inf(&r), &p.sup(&q).sup(&r)) >= best {
+                return None;
+            }
+            Some(segment_triangle(&a, &b, &p, &q, &r))
+        };
+        match mesh.bvh().find_best(cap + radius, box_cost, leaf_cost) {
+            Some((_, d)) => (d - radius).max(0.0),
+            None => cap,
         }
     }
 
@@ -457,6 +519,51 @@ mod tests {
                 prop_assert!((got - want).abs() <= 1e-9 * (1.0 + want), "obstacle {k}: {got} vs {want}");
             }
         }
+    }
+
+    /// The triangle-mesh fast path gives parry's distances on the glovebox shell (a thin
+    /// `trimesh`), for capsules around, inside and through its walls and ports, capped or not.
+    #[test]
+    fn trimesh_matches_parry() {
+        use rand::{RngExt, SeedableRng};
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("examples/scenarios/glovebox.toml");
+        let s = CollisionScene::new(&Scenario::load(&path).unwrap().workspace);
+        let k = (0..s.len())
+            .find(|&k| matches!(s.exact[k], Exact::Mesh { .. }))
+            .expect("the glovebox is a triangle mesh");
+        let o = &s.obstacles[k];
+        let (c, r) = s.bounds[k];
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(2);
+        let (mut near, mut touching) = (0, 0);
+        for _ in 0..3000 {
+            let mut p =
+                || c + nalgebra::Vector3::from_fn(|_, _| rng.random_range(-1.1 * r..1.1 * r));
+            let a = p();
+            let b = a + (p() - a) * 0.2;
+            let radius = 0.02;
+            let seg = Segment::new(to_parry_point(&a), to_parry_point(&b));
+            let want = query::distance(&Pose::IDENTITY, &seg, o.pose(), o.shape().as_ref())
+                .map_or(0.0, |d| (d.distance - radius).max(0.0));
+            let got = s.distance(k, &a, &b, radius);
+            assert!(
+                (got - want).abs() <= 1e-7 * (1.0 + want),
+                "{got} vs parry {want}"
+            );
+            let cap = 0.05;
+            let below = s.distance_below(k, &a, &b, radius, cap);
+            if want < cap {
+                assert_eq!(below, got);
+            } else {
+                assert!(below >= cap);
+            }
+            near += usize::from(want < 0.1);
+            touching += usize::from(want == 0.0);
+        }
+        assert!(
+            near > 100 && touching > 30,
+            "{near} near, {touching} touching"
+        );
     }
 
     /// The pipework scene uses both fast paths.
