@@ -1,7 +1,7 @@
 //! Cost of one edge check for each strategy, at L_max = π/4 and π/40, on
 //! - the paper-3d preset of seed 11 (8 links, 32 spheres, self-collision on),
 //! - the bundled paper-3d scenario and the pipework mesh scene (vessel hull, pipe-bundle
-//!   decomposition, floor),
+//!   decomposition, floor), and the glove box (a triangle-mesh shell) at π/4,
 //!
 //! and the scaling of `segment` and `certified` with clutter: generated cells of 32, 512 and
 //! 2,048 random spheres around the same 8-link arm (fixed seed).
@@ -62,6 +62,7 @@ fn edges(c: &mut Criterion) {
     for (label, file) in [("paper-3d", "paper-3d.toml"), ("mesh", "pipework.toml")] {
         bench_scene(c, label, &scenario(file), &CheckerKind::ALL, &[PI4, PI40]);
     }
+    bench_scene(c, "trimesh", &scenario("glovebox.toml"), &CheckerKind::ALL, &[PI4]);
 }
 
 /// The paper-3d preset of seed 11 with its spheres replaced by `n` random ones (radius

@@ -1,7 +1,11 @@
 //! The obstacles as the edge checkers see them: exact distances with closed forms where the
-//! shape allows, parry elsewhere, and a bounding-volume hierarchy (parry's [`Bvh`] over the
-//! obstacles' bounding boxes) as the broad phase, so that a query costs what the obstacles near
-//! the body cost, not what all of them cost.
+//! shape allows (spheres, capsules), fast paths for meshes (convex hulls and the parts of a
+//! convex decomposition through GJK with hill-climbing support points, [`ClimbingHull`];
+//! triangle meshes through a best-first search of their triangle hierarchy with the closed-form
+//! segment–triangle distance), parry's queries elsewhere; and a bounding-volume hierarchy
+//! (parry's [`Bvh`] over the obstacles' bounding boxes) as the broad phase, so that a query
+//! costs what the obstacles near the body cost, not what all of them cost. A capped query
+//! ([`CollisionScene::distance_below`]) stops as soon as an obstacle is proven beyond the cap.
 
 use super::distance::{point_segment, segment_segment, segment_triangle};
 use super::hull::ClimbingHull;

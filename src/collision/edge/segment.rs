@@ -5,8 +5,8 @@
 //! that segment, thickened by the link radius, must keep more than the clearance `ε` from every
 //! obstacle (Eq. 15–16). The distance is the true point-to-*segment* distance (clamped
 //! projection), not Eq. 14's distance to the infinite line; see
-//! [`crate::collision::distance`]. Spheres use the closed form, other shapes parry's
-//! segment–shape distance.
+//! [`crate::collision::distance`]. Spheres, capsules and triangle meshes use closed forms,
+//! convex hulls GJK ([`crate::collision::scene`]), other shapes parry's segment–shape distance.
 //!
 //! The straight segment is the chord of each point's real (curved) path, so a large rotation
 //! can sweep the real body across an obstacle the chords miss; the paper limits `L_max`
