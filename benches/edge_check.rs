@@ -62,7 +62,13 @@ fn edges(c: &mut Criterion) {
     for (label, file) in [("paper-3d", "paper-3d.toml"), ("mesh", "pipework.toml")] {
         bench_scene(c, label, &scenario(file), &CheckerKind::ALL, &[PI4, PI40]);
     }
-    bench_scene(c, "trimesh", &scenario("glovebox.toml"), &CheckerKind::ALL, &[PI4]);
+    bench_scene(
+        c,
+        "trimesh",
+        &scenario("glovebox.toml"),
+        &CheckerKind::ALL,
+        &[PI4],
+    );
 }
 
 /// The paper-3d preset of seed 11 with its spheres replaced by `n` random ones (radius
