@@ -129,7 +129,7 @@ impl ClimbingHull {
     /// `pose` (0 when they touch or overlap).
     #[inline]
     pub fn segment_distance(&self, pose: &Pose, a: &Point3<f64>, b: &Point3<f64>) -> f64 {
-        self.segment_distance_below(pose, a, b, f64::MAX)
+        self.segment_distance_below(pose, a, b, f64::INFINITY)
             .unwrap_or(0.0)
     }
 
@@ -159,7 +159,7 @@ impl ClimbingHull {
         match gjk::closest_points(pose, &seg, self, max, true, &mut simplex) {
             GJKResult::Intersection => Some(0.0),
             GJKResult::ClosestPoints(p1, p2, _) => Some((p1 - p2).length()),
-            GJKResult::NoIntersection(_) if max < f64::MAX => None,
+            GJKResult::NoIntersection(_) if max.is_finite() => None,
             // As parry: GJK did not converge.
             GJKResult::NoIntersection(_) | GJKResult::Proximity(_) => Some(0.0),
         }

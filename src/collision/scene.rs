@@ -269,47 +269,13 @@ impl CollisionScene {
     /// Distance between the capsule (`a`–`b`, `radius`) and obstacle `k`.
     #[inline]
     pub fn distance(&self, k: usize, a: &Point3<f64>, b: &Point3<f64>, radius: f64) -> f64 {
-        match &self.exact[k] {
-            Exact::Sphere { center, radius: r } => point_segment(center, a, b) - r - radius,
-            Exact::Capsule {
-                a: p,
-                b: q,
-                radius: r,
-            } => segment_segment(a, b, p, q) - r - radius,
-            Exact::Hull { pose, hull } => (hull.segment_distance(pose, a, b) - radius).max(0.0),
-            Exact::Parts(parts) => {
-                let mut best = f64::INFINITY;
-                for part in parts.iter() {
-                    // The part's bounding sphere bounds its distance from below.
-                    if point_segment(&part.center, a, b) - part.radius - radius >= best {
-                        continue;
-                    }
-                    let d = (part.hull.segment_distance(&part.pose, a, b) - radius).max(0.0);
-                    best = best.min(d);
-                }
-                best
-            }
-            Exact::Mesh { pose } => self.mesh_distance(k, pose, a, b, radius, f64::INFINITY),
-            Exact::General => {
-                let o = &self.obstacles[k];
-                let d = if a == b {
-                    let ball = Ball::new(radius);
-                    let pose = Pose::from_translation(to_parry_point(a));
-                    query::distance(&pose, &ball, o.pose(), o.shape().as_ref())
-                        .map_or(0.0, |d| d.distance)
-                } else {
-                    let seg = Segment::new(to_parry_point(a), to_parry_point(b));
-                    query::distance(&Pose::IDENTITY, &seg, o.pose(), o.shape().as_ref())
-                        .map_or(0.0, |d| (d.distance - radius).max(0.0))
-                };
-                d
-            }
-        }
+        self.distance_below(k, a, b, radius, f64::INFINITY)
     }
 
     /// [`CollisionScene::distance`] when it is below `cap`; otherwise some value `≥ cap`. The
-    /// convex hulls and decompositions stop their GJK iterations once the distance is proven
-    /// larger; below `cap` the value is [`CollisionScene::distance`]'s, bit for bit.
+    /// convex hulls and decompositions stop their GJK iterations, and a triangle mesh its
+    /// search, once the distance is proven larger; below `cap` the value is the uncapped one,
+    /// bit for bit (`cap = ∞` is [`CollisionScene::distance`]).
     #[inline]
     pub fn distance_below(
         &self,
@@ -320,6 +286,12 @@ impl CollisionScene {
         cap: f64,
     ) -> f64 {
         match &self.exact[k] {
+            Exact::Sphere { center, radius: r } => point_segment(center, a, b) - r - radius,
+            Exact::Capsule {
+                a: p,
+                b: q,
+                radius: r,
+            } => segment_segment(a, b, p, q) - r - radius,
             Exact::Hull { pose, hull } => hull
                 .segment_distance_below(pose, a, b, cap + radius)
                 .map_or(cap, |d| (d - radius).max(0.0)),
@@ -340,7 +312,20 @@ impl CollisionScene {
                 best
             }
             Exact::Mesh { pose } => self.mesh_distance(k, pose, a, b, radius, cap),
-            _ => self.distance(k, a, b, radius),
+            Exact::General => {
+                let o = &self.obstacles[k];
+                let d = if a == b {
+                    let ball = Ball::new(radius);
+                    let pose = Pose::from_translation(to_parry_point(a));
+                    query::distance(&pose, &ball, o.pose(), o.shape().as_ref())
+                        .map_or(0.0, |d| d.distance)
+                } else {
+                    let seg = Segment::new(to_parry_point(a), to_parry_point(b));
+                    query::distance(&Pose::IDENTITY, &seg, o.pose(), o.shape().as_ref())
+                        .map_or(0.0, |d| (d.distance - radius).max(0.0))
+                };
+                d
+            }
         }
     }
 
@@ -358,7 +343,7 @@ impl CollisionScene {
         cap: f64,
     ) -> f64 {
         let Some(mesh) = self.obstacles[k].shape().as_trimesh() else {
-            return self.distance(k, a, b, radius);
+            unreachable!("Exact::Mesh is built from a triangle mesh only");
         };
         let local =
             |p: &Point3<f64>| from_parry_point(pose.inverse_transform_point(to_parry_point(p)));

@@ -248,14 +248,7 @@ impl RobotBody {
         b: usize,
         k: usize,
     ) -> f64 {
-        let ns = self.radii.len();
-        if b < ns {
-            let [p, q] = &frames.segments[b];
-            scene.distance(k, p, q, self.radii[b])
-        } else {
-            let m = b - ns;
-            scene.shape_distance(k, &placed.poses[m], self.solids[m].shape.as_ref())
-        }
+        self.obstacle_distance_below(scene, frames, placed, b, k, f64::INFINITY)
     }
 
     /// [`RobotBody::obstacle_distance`] when it is below `cap`, otherwise some value `≥ cap`
@@ -270,11 +263,13 @@ impl RobotBody {
         k: usize,
         cap: f64,
     ) -> f64 {
-        if b < self.radii.len() {
+        let ns = self.radii.len();
+        if b < ns {
             let [p, q] = &frames.segments[b];
             scene.distance_below(k, p, q, self.radii[b], cap)
         } else {
-            self.obstacle_distance(scene, frames, placed, b, k)
+            let m = b - ns;
+            scene.shape_distance(k, &placed.poses[m], self.solids[m].shape.as_ref())
         }
     }
 
