@@ -1,5 +1,5 @@
 //! The obstacles as the edge checkers see them: exact distances with closed forms where the
-//! shape allows (spheres, capsules), fast paths for meshes (convex hulls and the parts of a
+//! shape allows (spheres, capsules, boxes), fast paths for meshes (convex hulls and the parts of a
 //! convex decomposition through GJK with hill-climbing support points, [`ClimbingHull`];
 //! triangle meshes through a best-first search of their triangle hierarchy with the closed-form
 //! segment–triangle distance), parry's queries elsewhere; and a bounding-volume hierarchy
@@ -7,7 +7,7 @@
 //! costs what the obstacles near the body cost, not what all of them cost. A capped query
 //! ([`CollisionScene::distance_below`]) stops as soon as an obstacle is proven beyond the cap.
 
-use super::distance::{point_segment, segment_segment, segment_triangle};
+use super::distance::{point_segment, segment_box, segment_segment, segment_triangle};
 use super::hull::ClimbingHull;
 use crate::world::convert::{from_parry_point, to_parry_point};
 use crate::world::{Obstacle, ObstacleShape, Workspace};
@@ -36,6 +36,11 @@ enum Exact {
     /// A triangle mesh (a surface) at its world pose: a best-first search of its triangle
     /// hierarchy with the closed-form segment–triangle distance.
     Mesh { pose: Pose },
+    /// A box at its world pose, with its half extents: the closed-form segment–box distance.
+    Cuboid {
+        pose: Pose,
+        half: nalgebra::Vector3<f64>,
+    },
     /// parry's distance query on the obstacle's shape.
     General,
 }
@@ -49,10 +54,17 @@ struct Part {
     radius: f64,
 }
 
-/// The fast path of a mesh shape: a triangle mesh ([`Exact::Mesh`]), a convex hull or convex
-/// parts ([`Exact::Hull`], [`Exact::Parts`]); `None` otherwise, or when a part is not a convex
-/// polyhedron.
+/// The fast path of a shape: a box ([`Exact::Cuboid`]), a triangle mesh ([`Exact::Mesh`]), a
+/// convex hull or convex parts ([`Exact::Hull`], [`Exact::Parts`]); `None` otherwise, or when a
+/// part is not a convex polyhedron.
 fn climbing(shape: &SharedShape, pose: &Pose) -> Option<Exact> {
+    if let Some(c) = shape.as_cuboid() {
+        let h = c.half_extents;
+        return Some(Exact::Cuboid {
+            pose: *pose,
+            half: nalgebra::Vector3::new(h.x, h.y, h.z),
+        });
+    }
     if shape.as_trimesh().is_some() {
         return Some(Exact::Mesh { pose: *pose });
     }
@@ -312,6 +324,12 @@ impl CollisionScene {
                 best
             }
             Exact::Mesh { pose } => self.mesh_distance(k, pose, a, b, radius, cap),
+            Exact::Cuboid { pose, half } => {
+                let local = |p: &Point3<f64>| {
+                    from_parry_point(pose.inverse_transform_point(to_parry_point(p)))
+                };
+                (segment_box(&local(a), &local(b), half) - radius).max(0.0)
+            }
             Exact::General => {
                 let o = &self.obstacles[k];
                 let d = if a == b {

@@ -5,7 +5,7 @@
 //! that segment, thickened by the link radius, must keep more than the clearance `ε` from every
 //! obstacle (Eq. 15–16). The distance is the true point-to-*segment* distance (clamped
 //! projection), not Eq. 14's distance to the infinite line; see
-//! [`crate::collision::distance`]. Spheres, capsules and triangle meshes use closed forms,
+//! [`crate::collision::distance`]. Spheres, capsules, boxes and triangle meshes use closed forms,
 //! convex hulls GJK ([`crate::collision::scene`]), other shapes parry's segment–shape distance.
 //!
 //! The straight segment is the chord of each point's real (curved) path, so a large rotation
