@@ -7,11 +7,11 @@
 //! On a convex polytope, a vertex that no neighbour along an edge improves on is a farthest
 //! vertex (the simplex method's argument), so climbing along improving edges, from the
 //! vertex farthest along a nearby fixed direction (a cube map of 384 cells), finds the same
-//! support value in a step or two. The
-//! distances are then parry's GJK distances with the same support values (where several
-//! vertices tie as the farthest, GJK may take another of them and stop at another point within
-//! its tolerance, about 5e-8 relative).
+//! support value in a step or two. The distances are then parry's GJK distances with the same
+//! support values (where several vertices tie as the farthest, GJK may take another of them and
+//! stop at another point within its tolerance, about 5e-8 relative).
 
+use crate::world::convert::to_parry_point;
 use nalgebra::Point3;
 use parry3d_f64::math::{Pose, Vector};
 use parry3d_f64::query::gjk::{self, CsoPoint, GJKResult, VoronoiSimplex};
@@ -119,13 +119,6 @@ impl ClimbingHull {
         })
     }
 
-    /// Number of vertices on the hull's faces.
-    pub fn vertex_count(&self) -> usize {
-        (0..self.points.len())
-            .filter(|&i| self.offsets[i + 1] > self.offsets[i])
-            .count()
-    }
-
     /// GJK distance between the segment `a`–`b` (world coordinates) and this hull placed at
     /// `pose` (0 when they touch or overlap).
     #[inline]
@@ -145,8 +138,7 @@ impl ClimbingHull {
         b: &Point3<f64>,
         max: f64,
     ) -> Option<f64> {
-        let to = |p: &Point3<f64>| Vector::new(p.x, p.y, p.z);
-        let seg = Segment::new(to(a), to(b));
+        let seg = Segment::new(to_parry_point(a), to_parry_point(b));
         // parry's `distance_support_map_support_map`, with the limit passed on to GJK.
         let dir = -pose.translation;
         let eps = parry3d_f64::math::DEFAULT_EPSILON;

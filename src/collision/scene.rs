@@ -57,7 +57,7 @@ struct Part {
 /// The fast path of a shape: a box ([`Exact::Cuboid`]), a triangle mesh ([`Exact::Mesh`]), a
 /// convex hull or convex parts ([`Exact::Hull`], [`Exact::Parts`]); `None` otherwise, or when a
 /// part is not a convex polyhedron.
-fn climbing(shape: &SharedShape, pose: &Pose) -> Option<Exact> {
+fn fast_path(shape: &SharedShape, pose: &Pose) -> Option<Exact> {
     if let Some(c) = shape.as_cuboid() {
         let h = c.half_extents;
         return Some(Exact::Cuboid {
@@ -115,6 +115,12 @@ pub struct CollisionScene {
 /// (a mesh's distance costs too much to leave to its bounding sphere's pruning).
 const LINEAR_SCAN: usize = 48;
 
+/// The point `p` (world coordinates) in the frame of `pose`.
+#[inline]
+fn local(pose: &Pose, p: &Point3<f64>) -> Point3<f64> {
+    from_parry_point(pose.inverse_transform_point(to_parry_point(p)))
+}
+
 /// Squared distance from `p` to the bounding box of a hierarchy node (0 inside).
 #[inline]
 fn node_distance_squared(node: &BvhNode, p: &Point3<f64>) -> f64 {
@@ -152,7 +158,7 @@ impl CollisionScene {
                         radius,
                     }
                 }
-                _ => climbing(o.shape(), o.pose()).unwrap_or(Exact::General),
+                _ => fast_path(o.shape(), o.pose()).unwrap_or(Exact::General),
             });
         }
         let linear = obstacles.len() <= LINEAR_SCAN
@@ -325,10 +331,7 @@ impl CollisionScene {
             }
             Exact::Mesh { pose } => self.mesh_distance(k, pose, a, b, radius, cap),
             Exact::Cuboid { pose, half } => {
-                let local = |p: &Point3<f64>| {
-                    from_parry_point(pose.inverse_transform_point(to_parry_point(p)))
-                };
-                (segment_box(&local(a), &local(b), half) - radius).max(0.0)
+                (segment_box(&local(pose, a), &local(pose, b), half) - radius).max(0.0)
             }
             Exact::General => {
                 let o = &self.obstacles[k];
@@ -363,9 +366,7 @@ impl CollisionScene {
         let Some(mesh) = self.obstacles[k].shape().as_trimesh() else {
             unreachable!("Exact::Mesh is built from a triangle mesh only");
         };
-        let local =
-            |p: &Point3<f64>| from_parry_point(pose.inverse_transform_point(to_parry_point(p)));
-        let (a, b) = (local(a), local(b));
+        let (a, b) = (local(pose, a), local(pose, b));
         let mid = nalgebra::center(&a, &b);
         let half = 0.5 * (b - a).norm();
         let (lo, hi) = (a.inf(&b), a.sup(&b));
@@ -380,10 +381,7 @@ impl CollisionScene {
         let box_cost = |node: &BvhNode, _best: f64| {
             let ball = node_distance_squared(node, &mid).sqrt() - half;
             let (l, h) = (node.mins(), node.maxs());
-            ball.max(box_gap(
-                &Point3::new(l.x, l.y, l.z),
-                &Point3::new(h.x, h.y, h.z),
-            ))
+            ball.max(box_gap(&from_parry_point(l), &from_parry_point(h)))
         };
         let leaf_cost = |t: u32, best: f64| {
             let [i, j, l] = indices[t as usize];
@@ -576,11 +574,12 @@ mod tests {
         );
     }
 
-    /// The pipework scene uses both fast paths.
+    /// The pipework scene takes the hull, decomposition and box fast paths.
     #[test]
     fn pipework_meshes_take_the_fast_paths() {
         let s = &scenes()[1];
         assert!(matches!(s.exact[0], Exact::Hull { .. }));
         assert!(matches!(&s.exact[1], Exact::Parts(p) if p.len() == 9));
+        assert!(matches!(s.exact[2], Exact::Cuboid { .. }));
     }
 }
