@@ -181,20 +181,25 @@ pub fn step_length(fa: &Frames, fb: &Frames, a: &[f64], b: &[f64], lambda: f64) 
 /// columns change.
 #[inline(always)]
 fn rotate_local(r: &mut Matrix3<f64>, axis: Axis, s: f64, c: f64) {
-    let (i, j) = match axis {
+    // Column-major storage: column `k` is `m[3k .. 3k + 3]`.
+    #[inline(always)]
+    fn mix(m: &mut [f64], i: usize, j: usize, s: f64, c: f64) {
+        let ci = [m[3 * i], m[3 * i + 1], m[3 * i + 2]];
+        let cj = [m[3 * j], m[3 * j + 1], m[3 * j + 2]];
+        for row in 0..3 {
+            m[3 * i + row] = c * ci[row] + s * cj[row];
+            m[3 * j + row] = -s * ci[row] + c * cj[row];
+        }
+    }
+    let m = r.as_mut_slice();
+    match axis {
         // R·Rx: col1' = c·col1 + s·col2, col2' = −s·col1 + c·col2
-        Axis::Rx => (1, 2),
+        Axis::Rx => mix(m, 1, 2, s, c),
         // R·Ry: col0' = c·col0 − s·col2, col2' = s·col0 + c·col2
-        Axis::Ry => (2, 0),
+        Axis::Ry => mix(m, 2, 0, s, c),
         // R·Rz: col0' = c·col0 + s·col1, col1' = −s·col0 + c·col1
-        Axis::Rz => (0, 1),
+        Axis::Rz => mix(m, 0, 1, s, c),
         _ => unreachable!("translation axis in rotate_local"),
-    };
-    for row in 0..3 {
-        let ci = r[(row, i)];
-        let cj = r[(row, j)];
-        r[(row, i)] = c * ci + s * cj;
-        r[(row, j)] = -s * ci + c * cj;
     }
 }
 
