@@ -232,6 +232,9 @@ pub(crate) struct Work {
     accel: Vec<f64>,
     /// `Ω_j`: the sum of `|Δa_k|` over the rotation axes `k < j`, for `j = 0 … dof`.
     omega: Vec<f64>,
+    /// `|Δa_j|`, and the same for rotation axes only (0 for translations).
+    abs_delta: Vec<f64>,
+    rot_delta: Vec<f64>,
     twist_a: Vec<Twist>,
     twist_b: Vec<Twist>,
     twist_m: Vec<Twist>,
@@ -258,41 +261,52 @@ impl Work {
         self.delta.extend(to.iter().zip(from).map(|(b, a)| b - a));
         // Ω_j = Σ_{k<j, rotations} |Δa_k|, for j = 0 … dof.
         self.omega.clear();
+        self.abs_delta.clear();
+        self.rot_delta.clear();
         let mut omega = 0.0;
         self.omega.push(omega);
         for (j, d) in self.delta.iter().enumerate() {
+            let d = d.abs();
+            self.abs_delta.push(d);
             if bounds.axis_column(j).1 {
-                omega += d.abs();
+                omega += d;
+                self.rot_delta.push(d);
+            } else {
+                self.rot_delta.push(0.0);
             }
             self.omega.push(omega);
         }
         let n = bounds.bodies();
-        self.suffix.clear();
         self.suffix.resize(n * stride, 0.0);
-        self.accel.clear();
         self.accel.resize(n * stride, 0.0);
-        for b in 0..n {
+        let rows = self
+            .suffix
+            .chunks_exact_mut(stride)
+            .zip(self.accel.chunks_exact_mut(stride));
+        for (b, (suffix, accel)) in rows.enumerate() {
             // With S_j the suffix sums of w_bj·|Δa_j|, the bound relative to level l is
             // Σ_{j≥l} |Δa_j|·((Ω_j − Ω_l)·w_bj + [j rotates]·S_j) = G_l − Ω_l·S_l + H_l, with
             // G_l = Σ_{j≥l} |Δa_j|·w_bj·Ω_j and H_l = Σ_{j≥l, rotations} |Δa_j|·S_j. Entries
             // from the body's level on are 0.
-            let w = bounds.factors(b);
             let level = body.level(b).min(dof);
-            let suffix = &mut self.suffix[b * stride..(b + 1) * stride];
-            let accel = &mut self.accel[b * stride..(b + 1) * stride];
             let (mut sum, mut g, mut h) = (0.0, 0.0, 0.0);
-            for j in (0..level).rev() {
-                let d = self.delta[j].abs();
-                sum += w[j] * d;
-                suffix[j] = sum;
-                let omega_j = self.omega[j];
-                g += d * w[j] * omega_j;
-                if bounds.axis_column(j).1 {
-                    h += d * sum;
-                }
-                let a = (g - omega_j * sum).max(0.0) + h;
-                accel[j] = a * (1.0 + 1e-9) + 1e-12;
+            let terms = bounds.factors(b)[..level]
+                .iter()
+                .zip(&self.abs_delta[..level])
+                .zip(&self.rot_delta[..level])
+                .zip(&self.omega[..level])
+                .zip(suffix[..level].iter_mut().zip(&mut accel[..level]))
+                .rev();
+            for ((((w, d), r), omega_j), (s, a)) in terms {
+                sum += w * d;
+                *s = sum;
+                g += d * w * omega_j;
+                h += r * sum;
+                let x = (g - omega_j * sum).max(0.0) + h;
+                *a = x * (1.0 + 1e-9) + 1e-12;
             }
+            suffix[level..].fill(0.0);
+            accel[level..].fill(0.0);
         }
     }
 
