@@ -277,8 +277,14 @@ impl Work {
             self.omega.push(omega);
         }
         let n = bounds.bodies();
-        self.suffix.resize(n * stride, 0.0);
-        self.accel.resize(n * stride, 0.0);
+        if self.suffix.len() != n * stride {
+            // Sized once per scratch (whose chain and body are fixed); entries from a body's
+            // level on stay 0, only those below it are rewritten per step.
+            self.suffix.clear();
+            self.suffix.resize(n * stride, 0.0);
+            self.accel.clear();
+            self.accel.resize(n * stride, 0.0);
+        }
         let rows = self
             .suffix
             .chunks_exact_mut(stride)
@@ -305,8 +311,6 @@ impl Work {
                 let x = (g - omega_j * sum).max(0.0) + h;
                 *a = x * (1.0 + 1e-9) + 1e-12;
             }
-            suffix[level..].fill(0.0);
-            accel[level..].fill(0.0);
         }
     }
 
