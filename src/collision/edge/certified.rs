@@ -176,19 +176,26 @@ impl Twist {
 /// entry `k` minus entry `l`).
 #[inline]
 fn twists(bounds: &MotionBounds, frames: &Frames, delta: &[f64], out: &mut Vec<Twist>) {
-    out.clear();
+    out.resize(delta.len() + 1, Twist::default());
     let mut acc = Twist::default();
-    out.push(acc);
-    for (j, (f, d)) in frames.axis_frames.iter().zip(delta).enumerate() {
+    out[0] = acc;
+    for (j, ((f, d), o)) in frames
+        .axis_frames
+        .iter()
+        .zip(delta)
+        .zip(&mut out[1..])
+        .enumerate()
+    {
         let (col, rot) = bounds.axis_column(j);
-        let axis = f.rotation.matrix().column(col).into_owned();
+        let m = f.rotation.matrix();
+        let axis = Vector3::new(m[(0, col)], m[(1, col)], m[(2, col)]);
         if rot {
             acc.w += axis * *d;
             acc.v += f.translation.vector.cross(&axis) * *d;
         } else {
             acc.v += axis * *d;
         }
-        out.push(acc);
+        *o = acc;
     }
 }
 
