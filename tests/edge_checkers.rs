@@ -246,3 +246,51 @@ fn a_checker_that_checks_the_end_never_passes_a_blocked_end() {
         }
     }
 }
+
+/// Given the kinematics of a step's end (as a planner has them from steering), every checker
+/// answers as without them, and `discrete`, `segment` and `certified` use them instead of
+/// evaluating the end again: the frames of another configuration change their answers.
+#[test]
+fn checkers_given_the_end_frames_answer_as_without_them() {
+    let s = Scenario::from_spec(&generate(Preset::Paper3d, 2)).unwrap();
+    let chain = s.space.largest().chain();
+    let scene = Arc::new(CollisionScene::new(&s.workspace));
+    let body = kinsynth::collision::RobotBody::of_chain(&chain);
+    let edges = sample_edges(&scene, &chain, &body, PI / 4.0, s.planner.lambda, 300, 9);
+    let mut frames = chain.frames();
+    let mut other = chain.frames();
+    for kind in CheckerKind::ALL {
+        let c = make_checker(kind, scene.clone(), BodyModel::Capsules);
+        let mut scratch = Scratch::new(&chain);
+        let (mut blocked, mut changed) = (0, 0);
+        for (i, (a, b)) in edges.iter().enumerate() {
+            chain.fk(b, &mut frames);
+            let fk = scratch.stats.fk;
+            let plain = c.edge_free(&chain, a, b, &mut scratch);
+            let fk_plain = scratch.stats.fk - fk;
+            let given = c.edge_free_to(&chain, a, b, &frames, &mut scratch);
+            let fk_given = scratch.stats.fk - fk - fk_plain;
+            assert_eq!(plain, given, "{kind}: edge {i}");
+            if kind == CheckerKind::Segment || kind == CheckerKind::Certified {
+                assert_eq!(fk_given + 1, fk_plain, "{kind}: edge {i} evaluated its end");
+            }
+            assert_eq!(
+                c.node_free(&chain, b, &mut scratch),
+                c.node_free_at(&chain, b, &frames, &mut scratch),
+                "{kind}: node {i}"
+            );
+            blocked += usize::from(!plain);
+            // The frames of the start in place of the end's: the checker sees another step.
+            chain.fk(a, &mut other);
+            if kind != CheckerKind::Ccd
+                && c.edge_free_to(&chain, a, b, &other, &mut scratch) != plain
+            {
+                changed += 1;
+            }
+        }
+        assert!(blocked >= 20, "{kind}: only {blocked} blocked edges");
+        if kind != CheckerKind::Ccd {
+            assert!(changed > 0, "{kind} ignored the frames it was given");
+        }
+    }
+}

@@ -146,6 +146,25 @@ pub struct Frames {
 }
 
 impl Frames {
+    /// Makes `self` a copy of `other` (both from [`Chain::frames`] of the same chain), without
+    /// allocating.
+    pub fn copy_from(&mut self, other: &Frames) {
+        fn copy<T: Copy>(to: &mut Vec<T>, from: &[T]) {
+            if to.len() == from.len() {
+                to.copy_from_slice(from);
+            } else {
+                to.clear();
+                to.extend_from_slice(from);
+            }
+        }
+        copy(&mut self.frames, &other.frames);
+        copy(&mut self.joints, &other.joints);
+        copy(&mut self.positions, &other.positions);
+        copy(&mut self.segments, &other.segments);
+        copy(&mut self.axis_frames, &other.axis_frames);
+        self.tcp = other.tcp;
+    }
+
     /// The end-effector position: the tool centre point (the origin of the last frame when
     /// the chain has no tool).
     pub fn end_effector(&self) -> Point3<f64> {

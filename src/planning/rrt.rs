@@ -393,11 +393,18 @@ impl<'a> Rrt<'a> {
         }
         // A checker that proves the whole step (its end included) needs no separate node
         // check of the end: the decision is the same.
+        // `work.frames` holds the kinematics of `q_new` from steering.
         if (!self.checker.edge_checks_end()
-            && !self.checker.node_free(self.chain, &work.q_new, scratch))
-            || !self
+            && !self
                 .checker
-                .edge_free(self.chain, tree.config(near), &work.q_new, scratch)
+                .node_free_at(self.chain, &work.q_new, &work.frames, scratch))
+            || !self.checker.edge_free_to(
+                self.chain,
+                tree.config(near),
+                &work.q_new,
+                &work.frames,
+                scratch,
+            )
         {
             return Step::Blocked;
         }

@@ -136,7 +136,24 @@ impl EdgeChecker for Ccd {
     }
 
     fn node_free(&self, chain: &Chain, a: &[f64], scratch: &mut Scratch) -> bool {
-        super::node_free_with(&self.scene, BodyModel::Capsules, chain, a, scratch)
+        super::node_free_with(&self.scene, BodyModel::Capsules, chain, a, None, scratch)
+    }
+
+    fn node_free_at(
+        &self,
+        chain: &Chain,
+        a: &[f64],
+        frames: &Frames,
+        scratch: &mut Scratch,
+    ) -> bool {
+        super::node_free_with(
+            &self.scene,
+            BodyModel::Capsules,
+            chain,
+            a,
+            Some(frames),
+            scratch,
+        )
     }
 
     fn edge_free(&self, chain: &Chain, from: &[f64], to: &[f64], scratch: &mut Scratch) -> bool {

@@ -360,7 +360,24 @@ impl EdgeChecker for Certified {
     }
 
     fn node_free(&self, chain: &Chain, a: &[f64], scratch: &mut Scratch) -> bool {
-        super::node_free_with(&self.scene, BodyModel::Capsules, chain, a, scratch)
+        super::node_free_with(&self.scene, BodyModel::Capsules, chain, a, None, scratch)
+    }
+
+    fn node_free_at(
+        &self,
+        chain: &Chain,
+        a: &[f64],
+        frames: &Frames,
+        scratch: &mut Scratch,
+    ) -> bool {
+        super::node_free_with(
+            &self.scene,
+            BodyModel::Capsules,
+            chain,
+            a,
+            Some(frames),
+            scratch,
+        )
     }
 
     fn edge_checks_end(&self) -> bool {
@@ -368,6 +385,31 @@ impl EdgeChecker for Certified {
     }
 
     fn edge_free(&self, chain: &Chain, from: &[f64], to: &[f64], scratch: &mut Scratch) -> bool {
+        self.edge(chain, from, to, None, scratch)
+    }
+
+    fn edge_free_to(
+        &self,
+        chain: &Chain,
+        from: &[f64],
+        to: &[f64],
+        to_frames: &Frames,
+        scratch: &mut Scratch,
+    ) -> bool {
+        self.edge(chain, from, to, Some(to_frames), scratch)
+    }
+}
+
+impl Certified {
+    /// [`EdgeChecker::edge_free`], with the frames of `to` when the caller has them.
+    fn edge(
+        &self,
+        chain: &Chain,
+        from: &[f64],
+        to: &[f64],
+        to_frames: Option<&Frames>,
+        scratch: &mut Scratch,
+    ) -> bool {
         scratch.stats.edges += 1;
         let scene = &*self.scene;
         let Scratch {
@@ -390,9 +432,9 @@ impl EdgeChecker for Certified {
         work.items.clear();
         work.stack.clear();
 
-        stats.fk += 2;
+        stats.fk += 1;
         chain.fk(from, fa);
-        chain.fk(to, fb);
+        super::fk_or_copy(chain, to, to_frames, fb, stats);
         body.place(fa, pa);
         body.place(fb, pb);
         body.balls(fa, pa, &mut work.balls_a);

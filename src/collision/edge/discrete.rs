@@ -4,7 +4,7 @@
 use super::{node_free_with, EdgeChecker, Scratch};
 use crate::collision::body::BodyModel;
 use crate::collision::scene::CollisionScene;
-use crate::kinematics::Chain;
+use crate::kinematics::{Chain, Frames};
 use std::sync::Arc;
 
 /// Node-only checking: an edge is free when its end configuration is.
@@ -27,11 +27,33 @@ impl EdgeChecker for Discrete {
     }
 
     fn node_free(&self, chain: &Chain, a: &[f64], scratch: &mut Scratch) -> bool {
-        node_free_with(&self.scene, self.body, chain, a, scratch)
+        node_free_with(&self.scene, self.body, chain, a, None, scratch)
+    }
+
+    fn node_free_at(
+        &self,
+        chain: &Chain,
+        a: &[f64],
+        frames: &Frames,
+        scratch: &mut Scratch,
+    ) -> bool {
+        node_free_with(&self.scene, self.body, chain, a, Some(frames), scratch)
     }
 
     fn edge_free(&self, chain: &Chain, _from: &[f64], to: &[f64], scratch: &mut Scratch) -> bool {
         scratch.stats.edges += 1;
-        node_free_with(&self.scene, self.body, chain, to, scratch)
+        node_free_with(&self.scene, self.body, chain, to, None, scratch)
+    }
+
+    fn edge_free_to(
+        &self,
+        chain: &Chain,
+        _from: &[f64],
+        to: &[f64],
+        to_frames: &Frames,
+        scratch: &mut Scratch,
+    ) -> bool {
+        scratch.stats.edges += 1;
+        node_free_with(&self.scene, self.body, chain, to, Some(to_frames), scratch)
     }
 }

@@ -160,19 +160,46 @@ pub trait EdgeChecker: Send + Sync {
     fn edge_checks_end(&self) -> bool {
         false
     }
+    /// [`EdgeChecker::node_free`] when the caller already holds `frames`, the result of
+    /// [`Chain::fk`] for `a`: the same answer, without evaluating the kinematics again.
+    fn node_free_at(
+        &self,
+        chain: &Chain,
+        a: &[f64],
+        frames: &Frames,
+        scratch: &mut Scratch,
+    ) -> bool {
+        let _ = frames;
+        self.node_free(chain, a, scratch)
+    }
+    /// [`EdgeChecker::edge_free`] when the caller already holds `to_frames`, the result of
+    /// [`Chain::fk`] for `to` (a planner has them from steering): the same answer, without
+    /// evaluating the kinematics of the end again.
+    fn edge_free_to(
+        &self,
+        chain: &Chain,
+        from: &[f64],
+        to: &[f64],
+        to_frames: &Frames,
+        scratch: &mut Scratch,
+    ) -> bool {
+        let _ = to_frames;
+        self.edge_free(chain, from, to, scratch)
+    }
 }
 
-/// Node check shared by the strategies: the body model at `a`, using `scratch.fa`.
+/// Node check shared by the strategies: the body model at `a`, using `scratch.fa` (a copy of
+/// `frames` when given: [`Chain::fk`] of `a`).
 pub(crate) fn node_free_with(
     scene: &CollisionScene,
     body: BodyModel,
     chain: &Chain,
     a: &[f64],
+    frames: Option<&Frames>,
     scratch: &mut Scratch,
 ) -> bool {
     scratch.stats.nodes += 1;
-    scratch.stats.fk += 1;
-    chain.fk(a, &mut scratch.fa);
+    fk_or_copy(chain, a, frames, &mut scratch.fa, &mut scratch.stats);
     scratch.body.place(&scratch.fa, &mut scratch.pa);
     match body {
         BodyModel::Capsules => super::body::bodies_free(
@@ -197,6 +224,25 @@ pub(crate) fn node_free_with(
                 &scratch.pa,
                 &mut scratch.near,
             ) && super::body::self_free(&scratch.body, &scratch.fa, &scratch.pa)
+        }
+    }
+}
+
+/// Writes the frames of `a` to `out`: a copy of `known` when given (the caller's [`Chain::fk`]
+/// of `a`), otherwise [`Chain::fk`] (counted in `stats`).
+#[inline]
+pub(crate) fn fk_or_copy(
+    chain: &Chain,
+    a: &[f64],
+    known: Option<&Frames>,
+    out: &mut Frames,
+    stats: &mut EdgeStats,
+) {
+    match known {
+        Some(f) => out.copy_from(f),
+        None => {
+            stats.fk += 1;
+            chain.fk(a, out);
         }
     }
 }

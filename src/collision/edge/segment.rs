@@ -20,7 +20,7 @@
 use super::{EdgeChecker, Scratch};
 use crate::collision::body::{enclosing_ball, link_points, self_free, solids_free, BodyModel};
 use crate::collision::scene::CollisionScene;
-use crate::kinematics::Chain;
+use crate::kinematics::{Chain, Frames};
 use std::sync::Arc;
 
 /// The paper's swept-point checker.
@@ -43,12 +43,47 @@ impl EdgeChecker for SegmentChecker {
     }
 
     fn node_free(&self, chain: &Chain, a: &[f64], scratch: &mut Scratch) -> bool {
-        super::node_free_with(&self.scene, self.body, chain, a, scratch)
+        super::node_free_with(&self.scene, self.body, chain, a, None, scratch)
+    }
+
+    fn node_free_at(
+        &self,
+        chain: &Chain,
+        a: &[f64],
+        frames: &Frames,
+        scratch: &mut Scratch,
+    ) -> bool {
+        super::node_free_with(&self.scene, self.body, chain, a, Some(frames), scratch)
     }
 
     fn edge_free(&self, chain: &Chain, from: &[f64], to: &[f64], scratch: &mut Scratch) -> bool {
+        self.edge(chain, from, to, None, scratch)
+    }
+
+    fn edge_free_to(
+        &self,
+        chain: &Chain,
+        from: &[f64],
+        to: &[f64],
+        to_frames: &Frames,
+        scratch: &mut Scratch,
+    ) -> bool {
+        self.edge(chain, from, to, Some(to_frames), scratch)
+    }
+}
+
+impl SegmentChecker {
+    /// [`EdgeChecker::edge_free`], with the frames of `to` when the caller has them.
+    fn edge(
+        &self,
+        chain: &Chain,
+        from: &[f64],
+        to: &[f64],
+        to_frames: Option<&Frames>,
+        scratch: &mut Scratch,
+    ) -> bool {
         scratch.stats.edges += 1;
-        scratch.stats.fk += 2;
+        scratch.stats.fk += 1;
         let scene = &*self.scene;
         let Scratch {
             fa,
@@ -60,10 +95,11 @@ impl EdgeChecker for SegmentChecker {
             near,
             body,
             pm,
+            stats,
             ..
         } = scratch;
         chain.fk(from, fa);
-        chain.fk(to, fb);
+        super::fk_or_copy(chain, to, to_frames, fb, stats);
         chain.colliders(fa, colliders);
         chain.colliders(fb, colliders_b);
         let r = chain.radius();
