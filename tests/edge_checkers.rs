@@ -268,7 +268,7 @@ fn checkers_given_the_end_frames_answer_as_without_them() {
             let fk = scratch.stats.fk;
             let plain = c.edge_free(&chain, a, b, &mut scratch);
             let fk_plain = scratch.stats.fk - fk;
-            let given = c.edge_free_to(&chain, a, b, &frames, &mut scratch);
+            let given = c.check_edge(&chain, a, b, Some(&frames), &mut scratch);
             let fk_given = scratch.stats.fk - fk - fk_plain;
             assert_eq!(plain, given, "{kind}: edge {i}");
             if kind == CheckerKind::Segment || kind == CheckerKind::Certified {
@@ -276,14 +276,14 @@ fn checkers_given_the_end_frames_answer_as_without_them() {
             }
             assert_eq!(
                 c.node_free(&chain, b, &mut scratch),
-                c.node_free_at(&chain, b, &frames, &mut scratch),
+                c.check_node(&chain, b, Some(&frames), &mut scratch),
                 "{kind}: node {i}"
             );
             blocked += usize::from(!plain);
             // The frames of the start in place of the end's: the checker sees another step.
             chain.fk(a, &mut other);
             if kind != CheckerKind::Ccd
-                && c.edge_free_to(&chain, a, b, &other, &mut scratch) != plain
+                && c.check_edge(&chain, a, b, Some(&other), &mut scratch) != plain
             {
                 changed += 1;
             }

@@ -397,12 +397,12 @@ impl<'a> Rrt<'a> {
         if (!self.checker.edge_checks_end()
             && !self
                 .checker
-                .node_free_at(self.chain, &work.q_new, &work.frames, scratch))
-            || !self.checker.edge_free_to(
+                .check_node(self.chain, &work.q_new, Some(&work.frames), scratch))
+            || !self.checker.check_edge(
                 self.chain,
                 tree.config(near),
                 &work.q_new,
-                &work.frames,
+                Some(&work.frames),
                 scratch,
             )
         {

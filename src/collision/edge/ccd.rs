@@ -135,28 +135,24 @@ impl EdgeChecker for Ccd {
         "ccd"
     }
 
-    fn node_free(&self, chain: &Chain, a: &[f64], scratch: &mut Scratch) -> bool {
-        super::node_free_with(&self.scene, BodyModel::Capsules, chain, a, None, scratch)
-    }
-
-    fn node_free_at(
+    fn check_node(
         &self,
         chain: &Chain,
         a: &[f64],
-        frames: &Frames,
+        frames: Option<&Frames>,
         scratch: &mut Scratch,
     ) -> bool {
-        super::node_free_with(
-            &self.scene,
-            BodyModel::Capsules,
-            chain,
-            a,
-            Some(frames),
-            scratch,
-        )
+        super::node_free_with(&self.scene, BodyModel::Capsules, chain, a, frames, scratch)
     }
 
-    fn edge_free(&self, chain: &Chain, from: &[f64], to: &[f64], scratch: &mut Scratch) -> bool {
+    fn check_edge(
+        &self,
+        chain: &Chain,
+        from: &[f64],
+        to: &[f64],
+        _to_frames: Option<&Frames>,
+        scratch: &mut Scratch,
+    ) -> bool {
         scratch.stats.edges += 1;
         let scene = &*self.scene;
         let eps = scene.clearance();

@@ -26,34 +26,25 @@ impl EdgeChecker for Discrete {
         "discrete"
     }
 
-    fn node_free(&self, chain: &Chain, a: &[f64], scratch: &mut Scratch) -> bool {
-        node_free_with(&self.scene, self.body, chain, a, None, scratch)
-    }
-
-    fn node_free_at(
+    fn check_node(
         &self,
         chain: &Chain,
         a: &[f64],
-        frames: &Frames,
+        frames: Option<&Frames>,
         scratch: &mut Scratch,
     ) -> bool {
-        node_free_with(&self.scene, self.body, chain, a, Some(frames), scratch)
+        node_free_with(&self.scene, self.body, chain, a, frames, scratch)
     }
 
-    fn edge_free(&self, chain: &Chain, _from: &[f64], to: &[f64], scratch: &mut Scratch) -> bool {
-        scratch.stats.edges += 1;
-        node_free_with(&self.scene, self.body, chain, to, None, scratch)
-    }
-
-    fn edge_free_to(
+    fn check_edge(
         &self,
         chain: &Chain,
         _from: &[f64],
         to: &[f64],
-        to_frames: &Frames,
+        to_frames: Option<&Frames>,
         scratch: &mut Scratch,
     ) -> bool {
         scratch.stats.edges += 1;
-        node_free_with(&self.scene, self.body, chain, to, Some(to_frames), scratch)
+        node_free_with(&self.scene, self.body, chain, to, to_frames, scratch)
     }
 }

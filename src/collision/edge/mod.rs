@@ -149,42 +149,41 @@ impl Scratch {
 pub trait EdgeChecker: Send + Sync {
     /// The strategy's name.
     fn name(&self) -> &'static str;
-    /// True when the body at configuration `a` is clear of every obstacle.
-    fn node_free(&self, chain: &Chain, a: &[f64], scratch: &mut Scratch) -> bool;
+    /// True when the body at configuration `a` is clear of every obstacle. `frames`, when
+    /// given, are the result of [`Chain::fk`] for `a` (a caller that has them saves the checker
+    /// evaluating them again; the answer is the same).
+    fn check_node(
+        &self,
+        chain: &Chain,
+        a: &[f64],
+        frames: Option<&Frames>,
+        scratch: &mut Scratch,
+    ) -> bool;
     /// True when the motion `a(t) = from + t·(to − from)`, `t ∈ [0, 1]`, is judged free. The
-    /// start `from` is assumed to have passed [`EdgeChecker::node_free`].
-    fn edge_free(&self, chain: &Chain, from: &[f64], to: &[f64], scratch: &mut Scratch) -> bool;
+    /// start `from` is assumed to have passed [`EdgeChecker::node_free`]. `to_frames`, when
+    /// given, are the result of [`Chain::fk`] for `to` (a planner has them from steering; the
+    /// answer is the same).
+    fn check_edge(
+        &self,
+        chain: &Chain,
+        from: &[f64],
+        to: &[f64],
+        to_frames: Option<&Frames>,
+        scratch: &mut Scratch,
+    ) -> bool;
     /// True when [`EdgeChecker::edge_free`] answers "free" only if the end configuration `to`
     /// is free as well (the whole motion, end included, is checked), so that a planner need
     /// not call [`EdgeChecker::node_free`] on a step's end before checking the step.
     fn edge_checks_end(&self) -> bool {
         false
     }
-    /// [`EdgeChecker::node_free`] when the caller already holds `frames`, the result of
-    /// [`Chain::fk`] for `a`: the same answer, without evaluating the kinematics again.
-    fn node_free_at(
-        &self,
-        chain: &Chain,
-        a: &[f64],
-        frames: &Frames,
-        scratch: &mut Scratch,
-    ) -> bool {
-        let _ = frames;
-        self.node_free(chain, a, scratch)
+    /// [`EdgeChecker::check_node`] without frames.
+    fn node_free(&self, chain: &Chain, a: &[f64], scratch: &mut Scratch) -> bool {
+        self.check_node(chain, a, None, scratch)
     }
-    /// [`EdgeChecker::edge_free`] when the caller already holds `to_frames`, the result of
-    /// [`Chain::fk`] for `to` (a planner has them from steering): the same answer, without
-    /// evaluating the kinematics of the end again.
-    fn edge_free_to(
-        &self,
-        chain: &Chain,
-        from: &[f64],
-        to: &[f64],
-        to_frames: &Frames,
-        scratch: &mut Scratch,
-    ) -> bool {
-        let _ = to_frames;
-        self.edge_free(chain, from, to, scratch)
+    /// [`EdgeChecker::check_edge`] without frames.
+    fn edge_free(&self, chain: &Chain, from: &[f64], to: &[f64], scratch: &mut Scratch) -> bool {
+        self.check_edge(chain, from, to, None, scratch)
     }
 }
 

@@ -42,39 +42,17 @@ impl EdgeChecker for SegmentChecker {
         "segment"
     }
 
-    fn node_free(&self, chain: &Chain, a: &[f64], scratch: &mut Scratch) -> bool {
-        super::node_free_with(&self.scene, self.body, chain, a, None, scratch)
-    }
-
-    fn node_free_at(
+    fn check_node(
         &self,
         chain: &Chain,
         a: &[f64],
-        frames: &Frames,
+        frames: Option<&Frames>,
         scratch: &mut Scratch,
     ) -> bool {
-        super::node_free_with(&self.scene, self.body, chain, a, Some(frames), scratch)
+        super::node_free_with(&self.scene, self.body, chain, a, frames, scratch)
     }
 
-    fn edge_free(&self, chain: &Chain, from: &[f64], to: &[f64], scratch: &mut Scratch) -> bool {
-        self.edge(chain, from, to, None, scratch)
-    }
-
-    fn edge_free_to(
-        &self,
-        chain: &Chain,
-        from: &[f64],
-        to: &[f64],
-        to_frames: &Frames,
-        scratch: &mut Scratch,
-    ) -> bool {
-        self.edge(chain, from, to, Some(to_frames), scratch)
-    }
-}
-
-impl SegmentChecker {
-    /// [`EdgeChecker::edge_free`], with the frames of `to` when the caller has them.
-    fn edge(
+    fn check_edge(
         &self,
         chain: &Chain,
         from: &[f64],
