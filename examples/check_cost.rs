@@ -36,9 +36,14 @@ fn main() {
         _ => vec![CheckerKind::Segment, CheckerKind::Certified],
     };
     let reps = |default: usize| -> usize {
-        args.get(2)
-            .map(|r| r.parse().expect("REPS: a whole number"))
-            .unwrap_or(default)
+        match args.get(2).map(|r| r.parse::<usize>()) {
+            None => default,
+            Some(Ok(n)) => n,
+            Some(Err(_)) => {
+                eprintln!("check_cost: REPS {:?} is not a whole number", args[2]);
+                std::process::exit(2);
+            }
+        }
     };
     let load = |path: &str| Scenario::load(Path::new(path)).expect("scenario");
     match mode {
