@@ -597,12 +597,26 @@ impl Chain {
     /// # Panics
     /// In debug builds, when `a` or `out` do not match the chain's sizes.
     pub fn fk(&self, a: &[f64], out: &mut Frames) {
+        self.fk_links(a, out, self.links.len());
+    }
+
+    /// Forward kinematics of the first `links` links only (all of them when `links` is at
+    /// least [`Chain::link_count`]): writes the base frame, the frames `F_1 … F_links`, their
+    /// joint origins and positions, the body segments of those links and the frames of their
+    /// free axes, exactly as [`Chain::fk`] does; everything of the later links (and the TCP,
+    /// unless every link is evaluated) is left as it was. A checker that needs only the bodies
+    /// near the base saves the rest of the chain.
+    ///
+    /// # Panics
+    /// In debug builds, when `a` or `out` do not match the chain's sizes.
+    pub fn fk_links(&self, a: &[f64], out: &mut Frames, links: usize) {
         debug_assert_eq!(a.len(), self.free.len(), "actuation vector length");
         debug_assert_eq!(out.frames.len(), self.links.len() + 1, "frame buffer size");
         let mut rot: Matrix3<f64> = *self.base.rotation.matrix();
         let mut pos: Vector3<f64> = self.base.translation.vector;
         out.frames[0] = self.base;
-        for (i, link) in self.links.iter().enumerate() {
+        let n = self.links.len();
+        for (i, link) in self.links.iter().enumerate().take(links) {
             // Body polyline, in the frame F_{i-1}: it starts at F_{i-1}'s origin and ends at the
             // joint origin, so only its interior points need transforming.
             let mut seg = link.segments.start;
@@ -664,7 +678,9 @@ impl Chain {
             // `rot` is a product of rotations, so it stays orthonormal.
             *f.rotation.matrix_mut_unchecked() = rot;
         }
-        let n = self.links.len();
+        if links < n {
+            return;
+        }
         match &self.tool {
             None => out.tcp = out.frames[n],
             Some(t) => {

@@ -89,6 +89,8 @@ pub struct RobotBody {
     solids: Vec<Solid>,
     levels: Vec<usize>,
     links: Vec<usize>,
+    /// Per body, the chain links forward kinematics must evaluate to place it.
+    fk_links: Vec<usize>,
     frames: Vec<String>,
     acm: AllowedCollisions,
 }
@@ -126,9 +128,16 @@ impl RobotBody {
             links.push(i.link);
             frames.push(i.frame.clone());
         }
+        let mut fk_links = links.clone();
         for s in &solids {
             levels.push(s.level);
             links.push(s.link);
+            // The carrier frame of a solid is that of free axis `level − 1`.
+            let carrier = match s.level {
+                0 => 0,
+                l => chain.free_axes().get(l - 1).map_or(chain.link_count(), |f| f.link),
+            };
+            fk_links.push(s.link.max(carrier).min(chain.link_count()));
             frames.push(s.frame.clone());
         }
         let mut body = RobotBody {
@@ -136,6 +145,7 @@ impl RobotBody {
             solids,
             levels,
             links,
+            fk_links,
             frames,
             acm: AllowedCollisions::default(),
         };
@@ -183,6 +193,12 @@ impl RobotBody {
         self.links[b]
     }
 
+    /// How many chain links forward kinematics must evaluate ([`Chain::fk_links`]) for body
+    /// `b` to be placed: its segment or its carrier frame lies in them.
+    pub fn fk_links(&self, b: usize) -> usize {
+        self.fk_links[b]
+    }
+
     /// URDF link carrying body `b`.
     pub fn frame(&self, b: usize) -> &str {
         &self.frames[b]
@@ -219,6 +235,32 @@ impl RobotBody {
             let world = carrier * s.local;
             out.poses.push(to_parry_pose(&world));
             out.centers.push(carrier * s.center);
+        }
+    }
+
+    /// As [`RobotBody::place`] for the solids within the first `links` chain links only
+    /// ([`RobotBody::fk_links`], for frames from [`Chain::fk_links`]); the others keep their
+    /// previous placement (or the identity, when `out` held none).
+    pub fn place_links(&self, frames: &Frames, out: &mut Placed, links: usize) {
+        let n = self.solids.len();
+        if out.poses.len() != n {
+            out.poses.clear();
+            out.poses.resize(n, Pose::identity());
+            out.centers.clear();
+            out.centers.resize(n, Point3::origin());
+        }
+        let ns = self.radii.len();
+        for (i, s) in self.solids.iter().enumerate() {
+            if self.fk_links[ns + i] > links {
+                continue;
+            }
+            let carrier = if s.level == 0 {
+                &frames.frames[0]
+            } else {
+                &frames.axis_frames[s.level - 1]
+            };
+            out.poses[i] = to_parry_pose(&(carrier * s.local));
+            out.centers[i] = carrier * s.center;
         }
     }
 

@@ -176,13 +176,26 @@ impl Twist {
 /// entry `k` minus entry `l`).
 #[inline]
 fn twists(bounds: &MotionBounds, frames: &Frames, delta: &[f64], out: &mut Vec<Twist>) {
+    twists_upto(bounds, frames, delta, out, delta.len());
+}
+
+/// As [`twists`], for the first `levels` axes only: entries `0 ..= levels` are written, the
+/// later ones left as they were (`out` is sized for every axis).
+#[inline]
+fn twists_upto(
+    bounds: &MotionBounds,
+    frames: &Frames,
+    delta: &[f64],
+    out: &mut Vec<Twist>,
+    levels: usize,
+) {
     out.resize(delta.len() + 1, Twist::default());
     let mut acc = Twist::default();
     out[0] = acc;
     for (j, ((f, d), o)) in frames
         .axis_frames
         .iter()
-        .zip(delta)
+        .zip(&delta[..levels])
         .zip(&mut out[1..])
         .enumerate()
     {
@@ -525,10 +538,24 @@ impl EdgeChecker for Certified {
             for ((qi, a), d) in q.iter_mut().zip(from).zip(&work.delta) {
                 *qi = a + tm * d;
             }
+            // Only the links and axes that move the interval's items are evaluated.
+            let (mut links, mut levels) = (0, 0);
+            for it in &work.items[iv.start..iv.start + iv.len] {
+                let b = it.body as usize;
+                links = links.max(body.fk_links(b));
+                let q = if it.other == ENV {
+                    b
+                } else {
+                    let o = it.other as usize;
+                    links = links.max(body.fk_links(o));
+                    o
+                };
+                levels = levels.max(body.level(q));
+            }
             stats.fk += 1;
-            chain.fk(q, fm);
-            body.place(fm, pm);
-            twists(bounds, fm, &work.delta, &mut work.twist_m);
+            chain.fk_links(q, fm, links);
+            body.place_links(fm, pm, links);
+            twists_upto(bounds, fm, &work.delta, &mut work.twist_m, levels);
             let half = 0.5 * (iv.t1 - iv.t0);
             // Children: left [t0, tm] then right [tm, t1], appended after the parent's items.
             // Per item: the clearance and speed at tm, and the children's motion bounds.
