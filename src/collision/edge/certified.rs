@@ -427,31 +427,33 @@ impl EdgeChecker for Certified {
         twists(bounds, fb, &work.delta, &mut work.twist_b);
         // Each body against the environment: c(t) = clearance − ε moves no faster than the
         // body. c0 > D proves the whole step; otherwise c1 > D − c0 does.
-        for b in 0..body.len() {
+        for b in (0..body.len()).rev() {
             let plain = work.relative(dof, b, 0);
             let level = body.level(b);
             let accel = work.accel(dof, b, 0);
             let u0 = speed(body, fa, pa, b, &work.twist_a[level]);
             let u1 = speed(body, fb, pb, b, &work.twist_b[level]);
             let bound = motion(1.0, plain, u0, u1, accel);
-            let (c0, hint) = body.clearance(
+            // The step's end first: in a planner it is the new configuration, where a
+            // collision is most likely.
+            let (c1, hint) = body.clearance(
                 scene,
-                fa,
-                pa,
+                fb,
+                pb,
                 b,
-                &work.balls_a[b],
+                &work.balls_b[b],
                 bound + CAP_MARGIN,
                 u32::MAX,
             );
-            if c0 <= 0.0 {
+            if c1 <= 0.0 {
                 return false;
             }
-            if c0 > bound {
+            if c1 > bound {
                 continue;
             }
-            let need = (bound - c0).max(0.0) + CAP_MARGIN;
-            let (c1, hint) = body.clearance(scene, fb, pb, b, &work.balls_b[b], need, hint);
-            if c1 <= 0.0 {
+            let need = (bound - c1).max(0.0) + CAP_MARGIN;
+            let (c0, hint) = body.clearance(scene, fa, pa, b, &work.balls_a[b], need, hint);
+            if c0 <= 0.0 {
                 return false;
             }
             if c0 + c1 > bound {
