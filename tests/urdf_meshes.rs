@@ -3,6 +3,7 @@
 //! free but the meshes block, named errors, SRDF pairs, and the design → URDF → reach round
 //! trip in collision mode.
 
+use kinsynth::collision::body::Placed;
 use kinsynth::collision::oracle::{judge_edge, sample_edges, ORACLE_SUBSTEPS};
 use kinsynth::collision::{
     make_checker, BodyModel, CheckerKind, CollisionScene, RobotBody, Scratch,
@@ -658,4 +659,67 @@ fn merged_co_located_joints_carry_their_intermediate_links() {
         let c = placed.centers[k];
         assert!((c.coords - want).norm() < 1e-12, "solid {k}: {c} vs {want}");
     }
+}
+
+/// Forward kinematics of the first links only (`Chain::fk_links`, which `certified` evaluates
+/// at a bisection point when its remaining items are near the base) places every body within
+/// them, segments and solids, exactly as the full evaluation does, whatever the buffers held
+/// before; with every link it is the full evaluation, the TCP included.
+#[test]
+fn forward_kinematics_of_the_first_links_places_their_bodies_as_the_full_one() {
+    let paper = kinsynth::Scenario::load(&root().join("examples/scenarios/paper-3d.toml")).unwrap();
+    let paper_chain = paper.space.largest().chain();
+    let robots = [
+        (paper_chain.clone(), RobotBody::of_chain(&paper_chain)),
+        (arm().urdf.chain, arm().body),
+        {
+            let ur5 = import(&root().join("examples/robots/ur5.urdf"), &ImportOptions::default());
+            (ur5.urdf.chain, ur5.body)
+        },
+    ];
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let mut solids_seen = 0;
+    for (chain, body) in &robots {
+        let n = chain.link_count();
+        let dof = chain.dof();
+        let (mut a, mut other) = (vec![0.0; dof], vec![0.0; dof]);
+        let (mut full, mut part) = (chain.frames(), chain.frames());
+        let (mut pf, mut pp) = (Placed::default(), Placed::default());
+        let (mut partial_bodies, mut stale) = (0, 0);
+        for _ in 0..20 {
+            chain.sample_config(&mut rng, &mut a);
+            chain.sample_config(&mut rng, &mut other);
+            chain.fk(&a, &mut full);
+            body.place(&full, &mut pf);
+            for links in 0..=n {
+                // Stale buffers: those of another configuration.
+                chain.fk(&other, &mut part);
+                body.place(&part, &mut pp);
+                chain.fk_links(&a, &mut part, links);
+                body.place_links(&part, &mut pp, links);
+                for b in 0..body.len() {
+                    let ns = body.segments();
+                    let same = body.ball(&full, &pf, b) == body.ball(&part, &pp, b)
+                        && if b < ns {
+                            full.segments[b] == part.segments[b]
+                        } else {
+                            pf.poses[b - ns] == pp.poses[b - ns]
+                        };
+                    if body.fk_links(b) <= links {
+                        assert!(same, "body {b} with {links} of {n} links");
+                        solids_seen += usize::from(b >= ns);
+                        partial_bodies += usize::from(links < n);
+                    } else {
+                        // Left as the other configuration placed it (a body turning about
+                        // its own axis stays put, so only counted).
+                        stale += usize::from(!same);
+                    }
+                }
+            }
+            assert_eq!(full.tcp, part.tcp, "all links: the TCP too");
+            assert_eq!(full.axis_frames, part.axis_frames);
+        }
+        assert!(partial_bodies > 0 && stale > 0, "{partial_bodies} {stale}");
+    }
+    assert!(solids_seen > 0, "the imported arms carry solids");
 }

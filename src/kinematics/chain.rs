@@ -597,7 +597,7 @@ impl Chain {
     /// # Panics
     /// In debug builds, when `a` or `out` do not match the chain's sizes.
     pub fn fk(&self, a: &[f64], out: &mut Frames) {
-        self.fk_links(a, out, self.links.len());
+        self.fk_links(a, out, usize::MAX);
     }
 
     /// Forward kinematics of the first `links` links only (all of them when `links` is at
@@ -609,6 +609,7 @@ impl Chain {
     ///
     /// # Panics
     /// In debug builds, when `a` or `out` do not match the chain's sizes.
+    #[inline(always)]
     pub fn fk_links(&self, a: &[f64], out: &mut Frames, links: usize) {
         debug_assert_eq!(a.len(), self.free.len(), "actuation vector length");
         debug_assert_eq!(out.frames.len(), self.links.len() + 1, "frame buffer size");
