@@ -108,6 +108,8 @@ pub struct CollisionScene {
     clearance: f64,
     /// Few obstacles, all with closed-form distances: searched by one linear pass.
     linear: bool,
+    /// Distinct for every scene built ([`CollisionScene::id`]).
+    id: u64,
 }
 
 /// Scenes with at most this many obstacles, all spheres or capsules, are searched by one pass
@@ -131,7 +133,17 @@ fn node_distance_squared(node: &BvhNode, p: &Point3<f64>) -> f64 {
     dx * dx + dy * dy + dz * dz
 }
 
+/// The identity of the next scene built.
+static NEXT_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+
 impl CollisionScene {
+    /// An identity distinct for every scene built in this process (a clone keeps it: it holds
+    /// the same obstacles), so that what was computed against one scene is never taken for
+    /// another's.
+    pub fn id(&self) -> u64 {
+        self.id
+    }
+
     /// The scene of a workspace.
     pub fn new(workspace: &Workspace) -> Self {
         let obstacles = workspace.obstacles.clone();
@@ -172,6 +184,7 @@ impl CollisionScene {
             bvh,
             clearance: workspace.clearance,
             linear,
+            id: NEXT_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
         }
     }
 

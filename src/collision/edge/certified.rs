@@ -255,6 +255,15 @@ pub(crate) struct Work {
     /// `|Δa_j|`, and the same for rotation axes only (0 for translations).
     abs_delta: Vec<f64>,
     rot_delta: Vec<f64>,
+    /// Per body: a lower bound of its clearance at the step's start and end, and whether it
+    /// is the exact clearance (`-∞`, false when unknown).
+    clear_a: Vec<(f64, bool)>,
+    clear_b: Vec<(f64, bool)>,
+    /// The end of the last step checked and the scene it was checked against (0: none): a
+    /// step that starts there (the planner extends the node it has just added) takes the
+    /// frames and clearances computed there instead of evaluating them again.
+    prev_to: Vec<f64>,
+    prev_scene: u64,
     twist_a: Vec<Twist>,
     twist_b: Vec<Twist>,
     twist_m: Vec<Twist>,
@@ -397,17 +406,15 @@ impl EdgeChecker for Certified {
         scratch.stats.edges += 1;
         let scene = &*self.scene;
         let Scratch {
-            fa,
-            fb,
             fm,
             q,
             bounds,
             certified: work,
             stats,
             body,
-            pa,
-            pb,
             pm,
+            ends,
+            placed_ends: placed,
             ..
         } = scratch;
         let body = &**body;
@@ -416,13 +423,32 @@ impl EdgeChecker for Certified {
         work.items.clear();
         work.stack.clear();
 
-        stats.fk += 1;
-        chain.fk(from, fa);
-        super::fk_or_copy(chain, to, to_frames, fb, stats);
-        body.place(fa, pa);
-        body.place(fb, pb);
-        body.balls(fa, pa, &mut work.balls_a);
-        body.balls(fb, pb, &mut work.balls_b);
+        let n = body.len();
+        if work.prev_scene == scene.id() && work.prev_to.as_slice() == from {
+            // This step starts where the last one ended: its frames, placement and clearances
+            // there are those of this step's start.
+            ends.swap(0, 1);
+            placed.swap(0, 1);
+            std::mem::swap(&mut work.balls_a, &mut work.balls_b);
+            std::mem::swap(&mut work.clear_a, &mut work.clear_b);
+        } else {
+            stats.fk += 1;
+            chain.fk(from, &mut ends[0]);
+            body.place(&ends[0], &mut placed[0]);
+            body.balls(&ends[0], &placed[0], &mut work.balls_a);
+            work.clear_a.clear();
+            work.clear_a.resize(n, (f64::NEG_INFINITY, false));
+        }
+        super::fk_or_copy(chain, to, to_frames, &mut ends[1], stats);
+        body.place(&ends[1], &mut placed[1]);
+        body.balls(&ends[1], &placed[1], &mut work.balls_b);
+        work.clear_b.clear();
+        work.clear_b.resize(n, (f64::NEG_INFINITY, false));
+        work.prev_to.clear();
+        work.prev_to.extend_from_slice(to);
+        work.prev_scene = scene.id();
+        let [fa, fb] = &*ends;
+        let [pa, pb] = &*placed;
         twists(bounds, fa, &work.delta, &mut work.twist_a);
         twists(bounds, fb, &work.delta, &mut work.twist_b);
         // Each body against the environment: c(t) = clearance − ε moves no faster than the
@@ -434,6 +460,12 @@ impl EdgeChecker for Certified {
             let u0 = speed(body, fa, pa, b, &work.twist_a[level]);
             let u1 = speed(body, fb, pb, b, &work.twist_b[level]);
             let bound = motion(1.0, plain, u0, u1, accel);
+            let (known0, exact0) = work.clear_a[b];
+            if known0 > bound {
+                // Proven from the start's clearance alone; c1 ≥ c0 − D at the end.
+                work.clear_b[b] = (known0 - bound, false);
+                continue;
+            }
             // The step's end first: in a planner it is the new configuration, where a
             // collision is most likely.
             let (c1, hint) = body.clearance(
@@ -445,6 +477,8 @@ impl EdgeChecker for Certified {
                 bound + CAP_MARGIN,
                 u32::MAX,
             );
+            // Exact when an obstacle was found below the cap, else a lower bound.
+            work.clear_b[b] = (c1, hint != u32::MAX);
             if c1 <= 0.0 {
                 return false;
             }
@@ -452,7 +486,11 @@ impl EdgeChecker for Certified {
                 continue;
             }
             let need = (bound - c1).max(0.0) + CAP_MARGIN;
-            let (c0, hint) = body.clearance(scene, fa, pa, b, &work.balls_a[b], need, hint);
+            let (c0, hint) = if exact0 {
+                (known0, hint)
+            } else {
+                body.clearance(scene, fa, pa, b, &work.balls_a[b], need, hint)
+            };
             if c0 <= 0.0 {
                 return false;
             }
