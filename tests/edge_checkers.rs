@@ -301,3 +301,100 @@ fn checkers_given_the_end_frames_answer_as_without_them() {
         }
     }
 }
+
+/// A random walk of steps on `chain`, each within `±step` per axis and the ranges, starting
+/// from `start` and continuing from each step's end (or, every fifth step, from a fresh
+/// sample): the sequence of steps a planner extending the node it has just added checks.
+fn walk(
+    chain: &kinsynth::kinematics::Chain,
+    n: usize,
+    step: f64,
+    seed: u64,
+) -> Vec<(Vec<f64>, Vec<f64>)> {
+    use rand::{RngExt, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let mut a = vec![0.0; chain.dof()];
+    chain.sample_config(&mut rng, &mut a);
+    let mut out = Vec::new();
+    for i in 0..n {
+        if i % 5 == 4 {
+            chain.sample_config(&mut rng, &mut a);
+        }
+        let b: Vec<f64> = a
+            .iter()
+            .zip(chain.free_axes())
+            .map(|(x, f)| (x + rng.random_range(-step..=step)).clamp(f.range.min, f.range.max))
+            .collect();
+        out.push((a.clone(), b.clone()));
+        a = b;
+    }
+    out
+}
+
+/// `certified` takes the frames, clearances and placement at a step's start from the previous
+/// step when that one ended there (a planner extends the node it has just added): the answers
+/// are those of a fresh scratch for every step, with fewer evaluations of the kinematics; and
+/// what was computed against one scene is never taken for another's, even at the same
+/// configuration (an empty cell's clearances would prove steps the cluttered cell blocks).
+#[test]
+fn certified_reuses_the_previous_end_only_where_it_holds() {
+    let s = Scenario::from_spec(&generate(Preset::Paper3d, 2)).unwrap();
+    let chain = s.space.largest().chain();
+    let cluttered = Arc::new(CollisionScene::new(&s.workspace));
+    let empty = scene(Vec::new(), s.workspace.clearance);
+    let on = |scene: &Arc<CollisionScene>| {
+        make_checker(CheckerKind::Certified, scene.clone(), BodyModel::Capsules)
+    };
+    let (c, c_empty) = (on(&cluttered), on(&empty));
+    let steps = walk(&chain, 600, 0.35, 4);
+    let body = kinsynth::collision::RobotBody::of_chain(&chain);
+    let mut chained = Scratch::new(&chain);
+    let (mut fresh_fk, mut blocked) = (0, 0);
+    for (i, (a, b)) in steps.iter().enumerate() {
+        let mut fresh = Scratch::new(&chain);
+        let want = c.edge_free(&chain, a, b, &mut fresh);
+        fresh_fk += fresh.stats.fk;
+        let got = c.edge_free(&chain, a, b, &mut chained);
+        assert_eq!(got, want, "step {i}");
+        blocked += usize::from(!want);
+        if got && i % 3 == 0 {
+            let oracle = judge_edge(&cluttered, &chain, &body, a, b, ORACLE_SUBSTEPS);
+            assert!(
+                oracle.free,
+                "step {i} called free: oracle hit at {:?}",
+                oracle.first_hit
+            );
+        }
+    }
+    assert!(
+        blocked >= 60,
+        "only {blocked} of {} steps blocked",
+        steps.len()
+    );
+    assert!(
+        chained.stats.fk + 300 < fresh_fk,
+        "the chained steps evaluated {} configurations, fresh ones {fresh_fk}",
+        chained.stats.fk
+    );
+    // Each step in the empty cell, then the next one (from its end) in the cluttered cell,
+    // with the same scratch.
+    let mut shared = Scratch::new(&chain);
+    let (mut pairs, mut cluttered_blocked) = (0, 0);
+    for (i, w) in steps.windows(2).enumerate() {
+        let [(a, b), (next_a, next_b)] = [&w[0], &w[1]];
+        if next_a != b {
+            continue;
+        }
+        let mut fresh = Scratch::new(&chain);
+        let want = c.edge_free(&chain, next_a, next_b, &mut fresh);
+        c_empty.edge_free(&chain, a, b, &mut shared);
+        let got = c.edge_free(&chain, next_a, next_b, &mut shared);
+        assert_eq!(got, want, "step {} after the empty cell", i + 1);
+        pairs += 1;
+        cluttered_blocked += usize::from(!want);
+    }
+    assert!(
+        pairs >= 300 && cluttered_blocked >= 30,
+        "{pairs} chained pairs, {cluttered_blocked} blocked"
+    );
+}

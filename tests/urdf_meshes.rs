@@ -673,7 +673,10 @@ fn forward_kinematics_of_the_first_links_places_their_bodies_as_the_full_one() {
         (paper_chain.clone(), RobotBody::of_chain(&paper_chain)),
         (arm().urdf.chain, arm().body),
         {
-            let ur5 = import(&root().join("examples/robots/ur5.urdf"), &ImportOptions::default());
+            let ur5 = import(
+                &root().join("examples/robots/ur5.urdf"),
+                &ImportOptions::default(),
+            );
             (ur5.urdf.chain, ur5.body)
         },
     ];

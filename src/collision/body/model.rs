@@ -135,7 +135,10 @@ impl RobotBody {
             // The carrier frame of a solid is that of free axis `level − 1`.
             let carrier = match s.level {
                 0 => 0,
-                l => chain.free_axes().get(l - 1).map_or(chain.link_count(), |f| f.link),
+                l => chain
+                    .free_axes()
+                    .get(l - 1)
+                    .map_or(chain.link_count(), |f| f.link),
             };
             fk_links.push(s.link.max(carrier).min(chain.link_count()));
             frames.push(s.frame.clone());

@@ -46,6 +46,16 @@
 //! hierarchy ([`CollisionScene::nearest`]), capped at the value that would prove the interval
 //! (anything farther is as good), and started from the obstacle found nearest at the previous
 //! configuration: its cost follows the obstacles near the body, not their number.
+//!
+//! Three things keep the work to what the proof needs. A body's clearance is queried at the
+//! step's end first (in a planner, the new configuration, where a collision is likeliest) and
+//! at its start only if the end alone does not prove the step. A step that starts where the
+//! previous one checked with the same scratch ended (a planner extending the node it has just
+//! added) takes the frames, placement and clearances computed there: an exact clearance is
+//! the start's `c0`, a lower bound (the query's cap, or `c0 − D` of a body the previous step
+//! proved without querying its end) proves the body when it exceeds `D`, and nothing is taken
+//! across scenes ([`CollisionScene::id`]). And a bisection point evaluates the kinematics only
+//! of the links that carry its interval's unproven items ([`Chain::fk_links`]).
 
 use super::{EdgeChecker, Scratch};
 use crate::collision::body::{BodyModel, MotionBounds, Placed, RobotBody};
@@ -452,7 +462,8 @@ impl EdgeChecker for Certified {
         twists(bounds, fa, &work.delta, &mut work.twist_a);
         twists(bounds, fb, &work.delta, &mut work.twist_b);
         // Each body against the environment: c(t) = clearance − ε moves no faster than the
-        // body. c0 > D proves the whole step; otherwise c1 > D − c0 does.
+        // body. c1 > D proves the whole step; otherwise c0 > D − c1 does. From the tip: the
+        // bodies that move most are the likeliest to block the step.
         for b in (0..body.len()).rev() {
             let plain = work.relative(dof, b, 0);
             let level = body.level(b);
