@@ -265,20 +265,11 @@ pub(crate) struct Work {
     /// `|Δa_j|`, and the same for rotation axes only (0 for translations).
     abs_delta: Vec<f64>,
     rot_delta: Vec<f64>,
-    /// Per body: a lower bound of its clearance at the step's start and end, and whether it
-    /// is the exact clearance (`-∞`, false when unknown).
-    clear_a: Vec<(f64, bool)>,
-    clear_b: Vec<(f64, bool)>,
-    /// The end of the last step checked and the scene it was checked against (0: none): a
-    /// step that starts there (the planner extends the node it has just added) takes the
-    /// frames and clearances computed there instead of evaluating them again.
-    prev_to: Vec<f64>,
-    prev_scene: u64,
+    /// Counts the steps checked (the age of the kept configurations).
+    clock: u64,
     twist_a: Vec<Twist>,
     twist_b: Vec<Twist>,
     twist_m: Vec<Twist>,
-    balls_a: Vec<(Point3<f64>, f64)>,
-    balls_b: Vec<(Point3<f64>, f64)>,
     items: Vec<Item>,
     mid: Vec<Mid>,
     stack: Vec<Interval>,
@@ -368,6 +359,91 @@ impl Work {
     }
 }
 
+/// How many recent configurations `certified` keeps per scratch (with their frames, placement
+/// and clearances) for the steps that start there: a planner extends the nodes it has just
+/// added, and most steps start at one of the last few steps' ends.
+pub const KEPT: usize = 16;
+
+/// A configuration `certified` has evaluated, with what it computed there.
+#[derive(Clone, Debug)]
+pub(crate) struct Kept {
+    config: Vec<f64>,
+    /// The scene the clearances are against ([`CollisionScene::id`]; 0: an empty slot).
+    scene: u64,
+    /// The step that last used it.
+    used: u64,
+    frames: Frames,
+    placed: Placed,
+    balls: Vec<(Point3<f64>, f64)>,
+    /// Per body, a lower bound of its clearance and whether it is the exact clearance
+    /// (`-∞`, false when unknown).
+    clear: Vec<(f64, bool)>,
+}
+
+/// Records in `clear` what is now known of body `b`'s clearance: an exact value replaces
+/// anything, a lower bound raises a lower bound.
+#[inline]
+fn learn(clear: &mut [(f64, bool)], b: usize, value: f64, exact: bool) {
+    let k = &mut clear[b];
+    if exact {
+        *k = (value, true);
+    } else if !k.1 && value > k.0 {
+        k.0 = value;
+    }
+}
+
+impl Kept {
+    fn new(chain: &Chain) -> Self {
+        Kept {
+            config: Vec::new(),
+            scene: 0,
+            used: 0,
+            frames: chain.frames(),
+            placed: Placed::default(),
+            balls: Vec::new(),
+            clear: Vec::new(),
+        }
+    }
+}
+
+/// The slot of `kept` that holds `config` for the scene `scene` (not `avoid`), and true; or
+/// else the least recently used other slot, emptied and set to `config`, and false.
+fn slot(kept: &mut [Kept], scene: u64, config: &[f64], avoid: usize, clock: u64) -> (usize, bool) {
+    let found = kept
+        .iter()
+        .enumerate()
+        .find(|(i, k)| *i != avoid && k.scene == scene && k.config.as_slice() == config)
+        .map(|(i, _)| i);
+    if let Some(i) = found {
+        kept[i].used = clock;
+        return (i, true);
+    }
+    let i = kept
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| *i != avoid)
+        .min_by_key(|(_, k)| k.used)
+        .map_or(0, |(i, _)| i);
+    let k = &mut kept[i];
+    k.config.clear();
+    k.config.extend_from_slice(config);
+    k.scene = scene;
+    k.used = clock;
+    (i, false)
+}
+
+/// Two distinct elements of `v`, mutably.
+fn two<T>(v: &mut [T], i: usize, j: usize) -> (&mut T, &mut T) {
+    assert_ne!(i, j);
+    if i < j {
+        let (x, y) = v.split_at_mut(j);
+        (&mut x[i], &mut y[0])
+    } else {
+        let (x, y) = v.split_at_mut(i);
+        (&mut y[0], &mut x[j])
+    }
+}
+
 /// Margin added to the distance a capped clearance query must exceed, so that a capped answer
 /// proves the strict inequality it is asked for.
 const CAP_MARGIN: f64 = 1e-12;
@@ -423,8 +499,7 @@ impl EdgeChecker for Certified {
             stats,
             body,
             pm,
-            ends,
-            placed_ends: placed,
+            kept,
             ..
         } = scratch;
         let body = &**body;
@@ -434,31 +509,33 @@ impl EdgeChecker for Certified {
         work.stack.clear();
 
         let n = body.len();
-        if work.prev_scene == scene.id() && work.prev_to.as_slice() == from {
-            // This step starts where the last one ended: its frames, placement and clearances
-            // there are those of this step's start.
-            ends.swap(0, 1);
-            placed.swap(0, 1);
-            std::mem::swap(&mut work.balls_a, &mut work.balls_b);
-            std::mem::swap(&mut work.clear_a, &mut work.clear_b);
-        } else {
-            stats.fk += 1;
-            chain.fk(from, &mut ends[0]);
-            body.place(&ends[0], &mut placed[0]);
-            body.balls(&ends[0], &placed[0], &mut work.balls_a);
-            work.clear_a.clear();
-            work.clear_a.resize(n, (f64::NEG_INFINITY, false));
+        if kept.is_empty() {
+            kept.resize_with(KEPT, || Kept::new(chain));
         }
-        super::fk_or_copy(chain, to, to_frames, &mut ends[1], stats);
-        body.place(&ends[1], &mut placed[1]);
-        body.balls(&ends[1], &placed[1], &mut work.balls_b);
-        work.clear_b.clear();
-        work.clear_b.resize(n, (f64::NEG_INFINITY, false));
-        work.prev_to.clear();
-        work.prev_to.extend_from_slice(to);
-        work.prev_scene = scene.id();
-        let [fa, fb] = &*ends;
-        let [pa, pb] = &*placed;
+        work.clock += 1;
+        let id = scene.id();
+        // A configuration evaluated by a recent step (the planner extends the nodes it has
+        // just added) comes with its frames, placement and clearances.
+        let (ia, hit_a) = slot(kept, id, from, usize::MAX, work.clock);
+        let (ib, hit_b) = slot(kept, id, to, ia, work.clock);
+        let (ka, kb) = two(kept, ia, ib);
+        if !hit_a {
+            stats.fk += 1;
+            chain.fk(from, &mut ka.frames);
+            body.place(&ka.frames, &mut ka.placed);
+            body.balls(&ka.frames, &ka.placed, &mut ka.balls);
+            ka.clear.clear();
+            ka.clear.resize(n, (f64::NEG_INFINITY, false));
+        }
+        if !hit_b {
+            super::fk_or_copy(chain, to, to_frames, &mut kb.frames, stats);
+            body.place(&kb.frames, &mut kb.placed);
+            body.balls(&kb.frames, &kb.placed, &mut kb.balls);
+            kb.clear.clear();
+            kb.clear.resize(n, (f64::NEG_INFINITY, false));
+        }
+        let (fa, fb) = (&ka.frames, &kb.frames);
+        let (pa, pb) = (&ka.placed, &kb.placed);
         twists(bounds, fa, &work.delta, &mut work.twist_a);
         twists(bounds, fb, &work.delta, &mut work.twist_b);
         // Each body against the environment: c(t) = clearance − ε moves no faster than the
@@ -471,25 +548,35 @@ impl EdgeChecker for Certified {
             let u0 = speed(body, fa, pa, b, &work.twist_a[level]);
             let u1 = speed(body, fb, pb, b, &work.twist_b[level]);
             let bound = motion(1.0, plain, u0, u1, accel);
-            let (known0, exact0) = work.clear_a[b];
+            let (known0, exact0) = ka.clear[b];
+            let (known1, exact1) = kb.clear[b];
             if known0 > bound {
                 // Proven from the start's clearance alone; c1 ≥ c0 − D at the end.
-                work.clear_b[b] = (known0 - bound, false);
+                learn(&mut kb.clear, b, known0 - bound, false);
+                continue;
+            }
+            if known1 > bound {
+                learn(&mut ka.clear, b, known1 - bound, false);
                 continue;
             }
             // The step's end first: in a planner it is the new configuration, where a
             // collision is most likely.
-            let (c1, hint) = body.clearance(
-                scene,
-                fb,
-                pb,
-                b,
-                &work.balls_b[b],
-                bound + CAP_MARGIN,
-                u32::MAX,
-            );
-            // Exact when an obstacle was found below the cap, else a lower bound.
-            work.clear_b[b] = (c1, hint != u32::MAX);
+            let (c1, hint) = if exact1 {
+                (known1, u32::MAX)
+            } else {
+                let (c1, hint) = body.clearance(
+                    scene,
+                    fb,
+                    pb,
+                    b,
+                    &kb.balls[b],
+                    bound + CAP_MARGIN,
+                    u32::MAX,
+                );
+                // Exact when an obstacle was found below the cap, else a lower bound.
+                learn(&mut kb.clear, b, c1, hint != u32::MAX);
+                (c1, hint)
+            };
             if c1 <= 0.0 {
                 return false;
             }
@@ -500,7 +587,9 @@ impl EdgeChecker for Certified {
             let (c0, hint) = if exact0 {
                 (known0, hint)
             } else {
-                body.clearance(scene, fa, pa, b, &work.balls_a[b], need, hint)
+                let (c0, h) = body.clearance(scene, fa, pa, b, &ka.balls[b], need, hint);
+                learn(&mut ka.clear, b, c0, h != u32::MAX);
+                (c0, h)
             };
             if c0 <= 0.0 {
                 return false;
@@ -530,11 +619,11 @@ impl EdgeChecker for Certified {
                 let ((cp, rp), (cq, rq)) = (balls[p], balls[qb]);
                 (cp - cq).norm() - rp - rq
             };
-            let ball0 = ball(&work.balls_a);
+            let ball0 = ball(&ka.balls);
             if ball0 > plain {
                 continue;
             }
-            let ball1 = ball(&work.balls_b);
+            let ball1 = ball(&kb.balls);
             if ball0 + ball1 > plain {
                 continue;
             }

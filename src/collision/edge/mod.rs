@@ -106,10 +106,9 @@ pub struct Scratch {
     pub(crate) pm: Placed,
     pub(crate) bounds: MotionBounds,
     pub(crate) certified: certified::Work,
-    /// `certified`'s frames and placed solids at a step's two ends (`[from, to]`), its own so
-    /// that the next step can start from them.
-    pub(crate) ends: [Frames; 2],
-    pub(crate) placed_ends: [Placed; 2],
+    /// `certified`'s recent configurations: frames, placement and clearances kept for the
+    /// steps that start (or end) there ([`certified::KEPT`] of them, made on first use).
+    pub(crate) kept: Vec<certified::Kept>,
     pub(crate) ccd: Vec<ccd::Moving>,
     /// Counters since creation.
     pub stats: EdgeStats,
@@ -128,8 +127,7 @@ impl Scratch {
             fa: chain.frames(),
             fb: chain.frames(),
             fm: chain.frames(),
-            ends: [chain.frames(), chain.frames()],
-            placed_ends: [Placed::default(), Placed::default()],
+            kept: Vec::new(),
             q: vec![0.0; chain.dof()],
             colliders: Vec::new(),
             colliders_b: Vec::new(),
