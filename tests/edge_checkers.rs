@@ -302,9 +302,10 @@ fn checkers_given_the_end_frames_answer_as_without_them() {
     }
 }
 
-/// A random walk of steps on `chain`, each within `±step` per axis and the ranges, starting
-/// from `start` and continuing from each step's end (or, every fifth step, from a fresh
-/// sample): the sequence of steps a planner extending the node it has just added checks.
+/// A random walk of steps on `chain`, each within `±step` per axis and the ranges: mostly
+/// from the last step's end, else from one of the last 40 ends (some of them beyond what a
+/// checker keeps) or a fresh sample, and now and then back to one of the last ends (a planner
+/// joining its trees): the steps a planner checks.
 fn walk(
     chain: &kinsynth::kinematics::Chain,
     n: usize,
@@ -315,25 +316,36 @@ fn walk(
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let mut a = vec![0.0; chain.dof()];
     chain.sample_config(&mut rng, &mut a);
+    let mut ends: Vec<Vec<f64>> = Vec::new();
     let mut out = Vec::new();
-    for i in 0..n {
-        if i % 5 == 4 {
-            chain.sample_config(&mut rng, &mut a);
+    for _ in 0..n {
+        match rng.random_range(0..10) {
+            0 => chain.sample_config(&mut rng, &mut a),
+            1..=3 if !ends.is_empty() => {
+                let back = rng.random_range(1..=ends.len().min(40));
+                a.clone_from(&ends[ends.len() - back]);
+            }
+            _ => {}
         }
-        let b: Vec<f64> = a
-            .iter()
-            .zip(chain.free_axes())
-            .map(|(x, f)| (x + rng.random_range(-step..=step)).clamp(f.range.min, f.range.max))
-            .collect();
+        let b: Vec<f64> = if rng.random_range(0..10) == 0 && ends.len() > 2 {
+            ends[ends.len() - rng.random_range(2..=ends.len().min(20))].clone()
+        } else {
+            a.iter()
+                .zip(chain.free_axes())
+                .map(|(x, f)| (x + rng.random_range(-step..=step)).clamp(f.range.min, f.range.max))
+                .collect()
+        };
         out.push((a.clone(), b.clone()));
+        ends.push(b.clone());
         a = b;
     }
     out
 }
 
-/// `certified` takes the frames, clearances and placement at a step's start from the previous
-/// step when that one ended there (a planner extends the node it has just added): the answers
-/// are those of a fresh scratch for every step, with fewer evaluations of the kinematics; and
+/// `certified` takes the frames, clearances and placement at a step's ends from the recent
+/// steps that evaluated those configurations (a planner extends the nodes it has just added):
+/// the answers are those of a fresh scratch for every step, with fewer evaluations of the
+/// kinematics; and
 /// what was computed against one scene is never taken for another's, even at the same
 /// configuration (an empty cell's clearances would prove steps the cluttered cell blocks).
 #[test]

@@ -332,7 +332,7 @@ impl RobotBody {
     /// obstacle nearest at a close-by configuration prunes the search best. `≤ 0` is a
     /// collision.
     #[allow(clippy::too_many_arguments)]
-    #[inline]
+    #[inline(never)]
     pub fn clearance(
         &self,
         scene: &CollisionScene,

@@ -49,13 +49,14 @@
 //!
 //! Three things keep the work to what the proof needs. A body's clearance is queried at the
 //! step's end first (in a planner, the new configuration, where a collision is likeliest) and
-//! at its start only if the end alone does not prove the step. A step that starts where the
-//! previous one checked with the same scratch ended (a planner extending the node it has just
-//! added) takes the frames, placement and clearances computed there: an exact clearance is
-//! the start's `c0`, a lower bound (the query's cap, or `c0 − D` of a body the previous step
-//! proved without querying its end) proves the body when it exceeds `D`, and nothing is taken
-//! across scenes ([`CollisionScene::id`]). And a bisection point evaluates the kinematics only
-//! of the links that carry its interval's unproven items ([`Chain::fk_links`]).
+//! at its start only if the end alone does not prove the step. The scratch keeps the last
+//! [`KEPT`] configurations it evaluated with their frames, placement and clearances, and a
+//! step that starts (or ends) at one of them (a planner extends the nodes it has just added)
+//! takes them from there: an exact clearance is that end's `c`, a lower bound (a capped
+//! query's cap, or `c0 − D` at the end of a body proven from its start) proves the body when
+//! it exceeds `D`, and nothing is taken across scenes ([`CollisionScene::id`]). And a
+//! bisection point evaluates the kinematics only of the links that carry its interval's
+//! unproven items ([`Chain::fk_links`]).
 
 use super::{EdgeChecker, Scratch};
 use crate::collision::body::{BodyModel, MotionBounds, Placed, RobotBody};
@@ -564,15 +565,8 @@ impl EdgeChecker for Certified {
             let (c1, hint) = if exact1 {
                 (known1, u32::MAX)
             } else {
-                let (c1, hint) = body.clearance(
-                    scene,
-                    fb,
-                    pb,
-                    b,
-                    &kb.balls[b],
-                    bound + CAP_MARGIN,
-                    u32::MAX,
-                );
+                let (c1, hint) =
+                    body.clearance(scene, fb, pb, b, &kb.balls[b], bound + CAP_MARGIN, u32::MAX);
                 // Exact when an obstacle was found below the cap, else a lower bound.
                 learn(&mut kb.clear, b, c1, hint != u32::MAX);
                 (c1, hint)
@@ -871,6 +865,83 @@ mod tests {
         assert!(
             tight * 4 > cases,
             "the speeds halved only {tight} of {cases} bounds"
+        );
+    }
+
+    /// What `certified` keeps of recent configurations holds: after every step of a walk that
+    /// revisits recent configurations, each kept slot's frames are those of its configuration,
+    /// and each clearance it records is the exact clearance there (to rounding) when marked
+    /// exact, and at most that otherwise; and steps do start from kept configurations.
+    #[test]
+    fn kept_clearances_are_exact_or_lower_bounds() {
+        let s = Scenario::from_spec(&crate::scenario::preset::generate(
+            crate::scenario::preset::Preset::Paper3d,
+            2,
+        ))
+        .unwrap();
+        let chain = s.space.largest().chain();
+        let scene = Arc::new(CollisionScene::new(&s.workspace));
+        let checker = Certified::new(scene.clone());
+        let mut scratch = Scratch::new(&chain);
+        let body = scratch.body.clone();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let dof = chain.dof();
+        let mut a = vec![0.0; dof];
+        chain.sample_config(&mut rng, &mut a);
+        let mut ends: Vec<Vec<f64>> = Vec::new();
+        let mut frames = chain.frames();
+        let (mut exact, mut bounds) = (0, 0);
+        for step in 0..400 {
+            if rng.random_range(0..4) == 0 && !ends.is_empty() {
+                let back = rng.random_range(1..=ends.len().min(20));
+                a.clone_from(&ends[ends.len() - back]);
+            }
+            let b: Vec<f64> = a
+                .iter()
+                .zip(chain.free_axes())
+                .map(|(x, f)| (x + rng.random_range(-0.4..=0.4)).clamp(f.range.min, f.range.max))
+                .collect();
+            checker.edge_free(&chain, &a, &b, &mut scratch);
+            for k in scratch.kept.iter().filter(|k| k.scene != 0) {
+                chain.fk(&k.config, &mut frames);
+                assert_eq!(frames.segments, k.frames.segments, "step {step}");
+                for (i, &(value, is_exact)) in k.clear.iter().enumerate() {
+                    if value == f64::NEG_INFINITY {
+                        continue;
+                    }
+                    let ball = body.ball(&k.frames, &k.placed, i);
+                    let (truth, _) = body.clearance(
+                        &scene,
+                        &k.frames,
+                        &k.placed,
+                        i,
+                        &ball,
+                        f64::INFINITY,
+                        u32::MAX,
+                    );
+                    if is_exact {
+                        assert!(
+                            (value - truth).abs() < 1e-12,
+                            "step {step}: {value} ≠ {truth}"
+                        );
+                        exact += 1;
+                    } else {
+                        assert!(value <= truth + 1e-12, "step {step}: {value} > {truth}");
+                        bounds += 1;
+                    }
+                }
+            }
+            ends.push(b.clone());
+            a = b;
+        }
+        assert!(
+            exact > 1000 && bounds > 1000,
+            "{exact} exact, {bounds} bounds"
+        );
+        assert!(
+            scratch.stats.fk < scratch.stats.edges * 5,
+            "{:?}",
+            scratch.stats
         );
     }
 
