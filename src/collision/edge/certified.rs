@@ -361,8 +361,8 @@ impl Work {
 }
 
 /// How many recent configurations `certified` keeps per scratch (with their frames, placement
-/// and clearances) for the steps that start there: a planner extends the nodes it has just
-/// added, and most steps start at one of the last few steps' ends.
+/// and clearances) for the steps that start or end there: a planner extends the nodes it has
+/// just added, and most steps start at one of the last few steps' ends.
 pub const KEPT: usize = 16;
 
 /// A configuration `certified` has evaluated, with what it computed there.

@@ -84,7 +84,9 @@ pub struct EdgeStats {
     pub nodes: u64,
     /// Calls of [`EdgeChecker::edge_free`].
     pub edges: u64,
-    /// Forward-kinematics evaluations made by the checker.
+    /// Forward-kinematics evaluations made by the checker: whole, or (at a bisection point of
+    /// `certified`) of the first links only ([`Chain::fk_links`]); none for a configuration
+    /// `certified` kept from an earlier check.
     pub fk: u64,
 }
 
