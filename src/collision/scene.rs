@@ -108,6 +108,8 @@ pub struct CollisionScene {
     clearance: f64,
     /// Few obstacles, all with closed-form distances: searched by one linear pass.
     linear: bool,
+    /// The bounding spheres of `bounds` in blocks, for the linear pass.
+    blocks: Blocks,
     /// Distinct for every scene built ([`CollisionScene::id`]).
     id: u64,
 }
@@ -116,6 +118,100 @@ pub struct CollisionScene {
 /// over their bounding spheres in [`CollisionScene::nearest`] instead of through the hierarchy
 /// (a mesh's distance costs too much to leave to its bounding sphere's pruning).
 const LINEAR_SCAN: usize = 48;
+
+/// Bounding spheres per block of [`Blocks`].
+const LANES: usize = 4;
+
+/// Bounding spheres as blocks of [`LANES`] centres and radii (structure of arrays), so that
+/// the linear pass of [`CollisionScene::nearest`] tests a block of them at once on the
+/// processor's vector lanes. The last block is filled up with copies of the last sphere,
+/// which the pass never reaches.
+#[derive(Clone, Debug, Default)]
+struct Blocks {
+    x: Vec<[f64; LANES]>,
+    y: Vec<[f64; LANES]>,
+    z: Vec<[f64; LANES]>,
+    r: Vec<[f64; LANES]>,
+}
+
+impl Blocks {
+    /// The blocks of the spheres `(centre, radius)`.
+    fn new(spheres: &[(Point3<f64>, f64)]) -> Self {
+        let mut out = Blocks::default();
+        for block in spheres.chunks(LANES) {
+            let at = |i: usize| block[i.min(block.len() - 1)];
+            out.x.push(std::array::from_fn(|i| at(i).0.x));
+            out.y.push(std::array::from_fn(|i| at(i).0.y));
+            out.z.push(std::array::from_fn(|i| at(i).0.z));
+            out.r.push(std::array::from_fn(|i| at(i).1));
+        }
+        out
+    }
+}
+
+/// Bit `i` is set when sphere `i` of a block (centres `x`, `y`, `z`, radii `r`) lies beyond
+/// `best` from the ball (`center`, `radius`): `reach > 0 and |c − center|² ≥ reach²` with
+/// `reach = best + r + radius`, evaluated in this order (the scalar test's rounding).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "sse2")]
+#[inline]
+fn skipped(
+    x: &[f64; LANES],
+    y: &[f64; LANES],
+    z: &[f64; LANES],
+    r: &[f64; LANES],
+    center: &Point3<f64>,
+    best: f64,
+    radius: f64,
+) -> u32 {
+    use std::arch::x86_64::*;
+    let (cx, cy, cz) = (
+        _mm_set1_pd(center.x),
+        _mm_set1_pd(center.y),
+        _mm_set1_pd(center.z),
+    );
+    let (best, radius, zero) = (_mm_set1_pd(best), _mm_set1_pd(radius), _mm_setzero_pd());
+    let mut mask = 0;
+    for h in 0..LANES / 2 {
+        let (i, j) = (2 * h, 2 * h + 1);
+        let dx = _mm_sub_pd(_mm_set_pd(x[j], x[i]), cx);
+        let dy = _mm_sub_pd(_mm_set_pd(y[j], y[i]), cy);
+        let dz = _mm_sub_pd(_mm_set_pd(z[j], z[i]), cz);
+        let d2 = _mm_add_pd(
+            _mm_add_pd(_mm_mul_pd(dx, dx), _mm_mul_pd(dy, dy)),
+            _mm_mul_pd(dz, dz),
+        );
+        let reach = _mm_add_pd(_mm_add_pd(best, _mm_set_pd(r[j], r[i])), radius);
+        let skip = _mm_and_pd(
+            _mm_cmpgt_pd(reach, zero),
+            _mm_cmpge_pd(d2, _mm_mul_pd(reach, reach)),
+        );
+        mask |= (_mm_movemask_pd(skip) as u32) << (2 * h);
+    }
+    mask
+}
+
+/// As the vector version: the same test, one sphere at a time.
+#[cfg(not(target_arch = "x86_64"))]
+#[inline(always)]
+fn skipped(
+    x: &[f64; LANES],
+    y: &[f64; LANES],
+    z: &[f64; LANES],
+    r: &[f64; LANES],
+    center: &Point3<f64>,
+    best: f64,
+    radius: f64,
+) -> u32 {
+    let mut mask = 0;
+    for i in 0..LANES {
+        let (dx, dy, dz) = (x[i] - center.x, y[i] - center.y, z[i] - center.z);
+        let reach = best + r[i] + radius;
+        let skip = reach > 0.0 && dx * dx + dy * dy + dz * dz >= reach * reach;
+        mask |= u32::from(skip) << i;
+    }
+    mask
+}
 
 /// The point `p` (world coordinates) in the frame of `pose`.
 #[inline]
@@ -177,9 +273,15 @@ impl CollisionScene {
             && exact
                 .iter()
                 .all(|e| matches!(e, Exact::Sphere { .. } | Exact::Capsule { .. }));
+        let blocks = if linear {
+            Blocks::new(&bounds)
+        } else {
+            Blocks::default()
+        };
         CollisionScene {
             obstacles,
             exact,
+            blocks,
             bounds,
             bvh,
             clearance: workspace.clearance,
@@ -255,18 +357,53 @@ impl CollisionScene {
             return (cap, u32::MAX);
         }
         if self.linear {
-            // Few obstacles: one pass over their bounding spheres beats the hierarchy.
+            // Few obstacles: one pass over their bounding spheres beats the hierarchy. An
+            // obstacle is skipped when its bounding sphere is no nearer than the best distance
+            // so far; a block of spheres is tested at once with the best at its start, and
+            // only its spheres that pass are tested again one by one, in order, with the best
+            // of that moment (once the best has changed within a block, every later sphere of
+            // the block is: a smaller best can only skip more, except where it turns the
+            // reach negative).
+            let b = &self.blocks;
             let (mut best, mut nearest) = (cap, u32::MAX);
-            for (k, (c, r)) in self.bounds.iter().enumerate() {
-                let reach = best + r + radius;
-                if k as u32 == skip || (reach > 0.0 && (c - center).norm_squared() >= reach * reach)
-                {
+            let n = self.bounds.len();
+            let blocks = b.x.iter().zip(&b.y).zip(b.z.iter().zip(&b.r));
+            for (block, ((x, y), (z, r))) in blocks.enumerate() {
+                // SAFETY: SSE2 is part of every x86_64 processor (the target's baseline).
+                #[cfg(target_arch = "x86_64")]
+                let skipped = unsafe { skipped(x, y, z, r, center, best, radius) };
+                #[cfg(not(target_arch = "x86_64"))]
+                let skipped = skipped(x, y, z, r, center, best, radius);
+                if skipped == (1 << LANES) - 1 {
                     continue;
                 }
-                let d = dist(k, best);
-                if d < best {
-                    best = d;
-                    nearest = k as u32;
+                let start = best;
+                for i in 0..LANES {
+                    let pass = skipped & (1 << i) == 0;
+                    let k = block * LANES + i;
+                    if k >= n {
+                        break;
+                    }
+                    if k as u32 == skip {
+                        continue;
+                    }
+                    if best == start {
+                        // The block's test holds for this best.
+                        if !pass {
+                            continue;
+                        }
+                    } else {
+                        let (c, r) = &self.bounds[k];
+                        let reach = best + r + radius;
+                        if reach > 0.0 && (c - center).norm_squared() >= reach * reach {
+                            continue;
+                        }
+                    }
+                    let d = dist(k, best);
+                    if d < best {
+                        best = d;
+                        nearest = k as u32;
+                    }
                 }
             }
             return (best, nearest);
@@ -585,6 +722,61 @@ mod tests {
             near > 100 && touching > 30,
             "{near} near, {touching} touching"
         );
+    }
+
+    /// The blockwise linear pass gives what the plain pass over the obstacles one by one
+    /// gives (the same distance and the same nearest obstacle), for scenes whose last block is
+    /// partly filled, with and without an obstacle to skip, any cap, and balls that reach
+    /// into the spheres (a best below `−r` turns the reach negative).
+    #[test]
+    fn blockwise_linear_pass_is_the_plain_one() {
+        use crate::world::Obstacle;
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let mut checked = 0;
+        for n in [1usize, 3, 4, 5, 7, 13, 32] {
+            let obstacles = (0..n)
+                .map(|k| {
+                    let c = Point3::from(nalgebra::Vector3::from_fn(|_, _| {
+                        rng.random_range(-1.0..1.0)
+                    }));
+                    Obstacle::sphere(format!("s{k}"), c, rng.random_range(0.01..0.4)).unwrap()
+                })
+                .collect();
+            let tasks = vec![Point3::new(5.0, 5.0, 5.0)];
+            let s = CollisionScene::new(&Workspace::new(obstacles, tasks, 0.01).unwrap());
+            assert!(s.linear && s.blocks.x.len() == n.div_ceil(LANES));
+            for _ in 0..2000 {
+                let a = Point3::from(nalgebra::Vector3::from_fn(|_, _| {
+                    rng.random_range(-1.2..1.2)
+                }));
+                let b = a + nalgebra::Vector3::from_fn(|_, _| rng.random_range(-0.5..0.5));
+                let r = rng.random_range(0.0..0.3);
+                let center = nalgebra::center(&a, &b);
+                let radius = 0.5 * (b - a).norm() + r;
+                let cap = [f64::INFINITY, rng.random_range(-0.3..1.0)][rng.random_range(0..2)];
+                let skip = [u32::MAX, rng.random_range(0..n as u32)][rng.random_range(0..2)];
+                let dist = |k: usize, c: f64| s.distance_below(k, &a, &b, r, c);
+                let got = s.nearest(&center, radius, cap, skip, dist);
+                let (mut best, mut nearest) = (cap, u32::MAX);
+                for (k, (c, rk)) in s.bounds.iter().enumerate() {
+                    let reach = best + rk + radius;
+                    if k as u32 == skip
+                        || (reach > 0.0 && (c - center).norm_squared() >= reach * reach)
+                    {
+                        continue;
+                    }
+                    let d = dist(k, best);
+                    if d < best {
+                        best = d;
+                        nearest = k as u32;
+                    }
+                }
+                assert_eq!(got, (best, nearest), "{n} spheres");
+                checked += usize::from(nearest != u32::MAX);
+            }
+        }
+        assert!(checked > 5000, "{checked}");
     }
 
     /// The pipework scene takes the hull, decomposition and box fast paths.

@@ -22,6 +22,14 @@ pub struct MotionBounds {
     /// Per free axis: the column of its frame's rotation that is the axis direction, and
     /// whether it is a rotation.
     column: Vec<(usize, bool)>,
+    /// The free axes in runs of one link each, as ranges of axis indices (a body's level is
+    /// the end of a run, or 0).
+    groups: Vec<(usize, usize)>,
+    /// Per body and run: the factor `w_bj` of the run's rotation axes (equal within a link;
+    /// 0 for the runs that do not move the body).
+    group_w: Vec<f64>,
+    /// Per body: how many runs move it, or `None` when its level splits a run.
+    body_runs: Vec<Option<usize>>,
 }
 
 impl MotionBounds {
@@ -58,11 +66,37 @@ impl MotionBounds {
             .iter()
             .map(|a| (a.axis.index() % 3, a.axis.is_rotation()))
             .collect();
+        let mut groups: Vec<(usize, usize)> = Vec::new();
+        for (j, axis) in chain.free_axes().iter().enumerate() {
+            match groups.last_mut() {
+                Some(g) if chain.free_axes()[g.0].link == axis.link => g.1 = j + 1,
+                _ => groups.push((j, j + 1)),
+            }
+        }
+        let mut group_w = vec![0.0; n * groups.len()];
+        for b in 0..n {
+            for (g, &(start, end)) in groups.iter().enumerate() {
+                // The rotation factors of one link are equal (they depend on the link only).
+                let rot = (start..end).filter(|&j| chain.free_axes()[j].axis.is_rotation());
+                group_w[b * groups.len() + g] = rot.map(|j| w[b * dof + j]).fold(0.0, f64::max);
+            }
+        }
+        let body_runs = (0..n)
+            .map(|b| {
+                let level = body.level(b).min(dof);
+                let whole = groups.iter().take_while(|g| g.1 <= level).count();
+                let split = groups.get(whole).is_some_and(|g| g.0 < level);
+                (!split).then_some(whole)
+            })
+            .collect();
         MotionBounds {
             bodies: n,
             dof,
             w,
             column,
+            groups,
+            group_w,
+            body_runs,
         }
     }
 
@@ -90,6 +124,27 @@ impl MotionBounds {
     #[inline]
     pub fn axis_column(&self, j: usize) -> (usize, bool) {
         self.column[j]
+    }
+
+    /// The free axes in runs of one link each (ranges of axis indices, in order).
+    #[inline]
+    pub fn groups(&self) -> &[(usize, usize)] {
+        &self.groups
+    }
+
+    /// Per run of [`MotionBounds::groups`]: body `b`'s factor `w_bj` for the run's rotation
+    /// axes (all equal; 0 for runs that do not move the body).
+    #[inline]
+    pub fn group_factors(&self, b: usize) -> &[f64] {
+        let n = self.groups.len();
+        &self.group_w[b * n..(b + 1) * n]
+    }
+
+    /// How many runs of [`MotionBounds::groups`] move body `b` (all before its level), or
+    /// `None` when its level falls inside a run.
+    #[inline]
+    pub fn body_runs(&self, b: usize) -> Option<usize> {
+        self.body_runs[b]
     }
 
     /// Number of free axes covered.

@@ -251,6 +251,53 @@ fn relative_speed(
     speed(body, frames, placed, q, &t)
 }
 
+/// The suffix sums `S_l` of body `b`'s motion bound and its acceleration bounds `A_l` for
+/// every level `l` below `level`, axis by axis from the factors `w_bj` (`factors`) and, per
+/// axis, `(|Δa_j|, |Δa_j| for rotations else 0, Ω_j)` (`terms`).
+fn rows_by_axis(
+    factors: &[f64],
+    level: usize,
+    terms: (&[f64], &[f64], &[f64]),
+    suffix: &mut [f64],
+    accel: &mut [f64],
+) {
+    let (abs_delta, rot_delta, omega) = terms;
+    let (mut sum, mut g, mut h) = (0.0, 0.0, 0.0);
+    let terms = factors[..level]
+        .iter()
+        .zip(&abs_delta[..level])
+        .zip(&rot_delta[..level])
+        .zip(&omega[..level])
+        .zip(suffix[..level].iter_mut().zip(&mut accel[..level]))
+        .rev();
+    for ((((w, d), r), omega_j), (s, a)) in terms {
+        sum += w * d;
+        *s = sum;
+        g += d * w * omega_j;
+        h += r * sum;
+        let x = (g - omega_j * sum).max(0.0) + h;
+        *a = x * (1.0 + 1e-9) + 1e-12;
+    }
+}
+
+/// What one link's run of free axes contributes to the motion and acceleration bounds of a
+/// step, for any body it moves (whose factor for the run's rotations is `w`).
+#[derive(Clone, Copy, Debug, Default)]
+struct Run {
+    /// `Ω` at the run's first axis.
+    omega: f64,
+    /// `Σ |Δa_j|` over its rotation axes and over its translation axes.
+    rot: f64,
+    trans: f64,
+    /// `Σ |Δa_j|·Ω_j` over its rotations and over its translations.
+    g_rot: f64,
+    g_trans: f64,
+    /// `Σ |Δa_j|·R_j` and `Σ |Δa_j|·T_j` over its rotations `j`, where `R_j` (`T_j`) sums
+    /// `|Δa_k|` over the run's rotations `k ≥ j` (translations `k > j`).
+    h_rot: f64,
+    h_trans: f64,
+}
+
 /// Reused buffers of the certified checker (inside [`Scratch`]).
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Work {
@@ -266,6 +313,8 @@ pub(crate) struct Work {
     /// `|Δa_j|`, and the same for rotation axes only (0 for translations).
     abs_delta: Vec<f64>,
     rot_delta: Vec<f64>,
+    /// Per run of one link's free axes ([`MotionBounds::groups`]), the sums the bounds need.
+    runs: Vec<Run>,
     /// Counts the steps checked (the age of the kept configurations).
     clock: u64,
     twist_a: Vec<Twist>,
@@ -288,24 +337,28 @@ impl Work {
     ) {
         let dof = bounds.dof();
         let stride = dof + 1;
-        self.delta.clear();
-        self.delta.extend(to.iter().zip(from).map(|(b, a)| b - a));
+        if self.delta.len() != dof {
+            // Sized once per scratch (whose chain is fixed), then overwritten per step.
+            self.delta.resize(dof, 0.0);
+            self.abs_delta.resize(dof, 0.0);
+            self.rot_delta.resize(dof, 0.0);
+            self.omega.resize(dof + 1, 0.0);
+            self.runs.resize(bounds.groups().len(), Run::default());
+        }
         // Ω_j = Σ_{k<j, rotations} |Δa_k|, for j = 0 … dof.
-        self.omega.clear();
-        self.abs_delta.clear();
-        self.rot_delta.clear();
         let mut omega = 0.0;
-        self.omega.push(omega);
-        for (j, d) in self.delta.iter().enumerate() {
-            let d = d.abs();
-            self.abs_delta.push(d);
-            if bounds.axis_column(j).1 {
-                omega += d;
-                self.rot_delta.push(d);
-            } else {
-                self.rot_delta.push(0.0);
-            }
-            self.omega.push(omega);
+        self.omega[0] = omega;
+        let axes = to
+            .iter()
+            .zip(from)
+            .zip(self.delta.iter_mut().zip(&mut self.abs_delta))
+            .zip(self.rot_delta.iter_mut().zip(&mut self.omega[1..]));
+        for (j, (((b, a), (delta, abs)), (rot, om))) in axes.enumerate() {
+            *delta = b - a;
+            *abs = delta.abs();
+            *rot = if bounds.axis_column(j).1 { *abs } else { 0.0 };
+            omega += *rot;
+            *om = omega;
         }
         let n = bounds.bodies();
         if self.suffix.len() != n * stride {
@@ -316,31 +369,59 @@ impl Work {
             self.accel.clear();
             self.accel.resize(n * stride, 0.0);
         }
-        let rows = self
-            .suffix
-            .chunks_exact_mut(stride)
-            .zip(self.accel.chunks_exact_mut(stride));
-        for (b, (suffix, accel)) in rows.enumerate() {
+        // Per run of one link's axes (whose rotation factors are equal for every body): the
+        // sums a body's bounds need from it, so that a body's row costs one term per link.
+        for (&(start, end), run) in bounds.groups().iter().zip(&mut self.runs) {
+            *run = Run {
+                omega: self.omega[start],
+                ..Run::default()
+            };
+            let (mut rot_after, mut trans_after) = (0.0, 0.0);
+            for j in (start..end).rev() {
+                let (d, omega_j) = (self.abs_delta[j], self.omega[j]);
+                if bounds.axis_column(j).1 {
+                    rot_after += d;
+                    run.rot += d;
+                    run.g_rot += d * omega_j;
+                    run.h_rot += d * rot_after;
+                    run.h_trans += d * trans_after;
+                } else {
+                    trans_after += d;
+                    run.trans += d;
+                    run.g_trans += d * omega_j;
+                }
+            }
+        }
+        let groups = bounds.groups();
+        for b in 0..n {
+            let (suffix, accel) = (
+                &mut self.suffix[b * stride..(b + 1) * stride],
+                &mut self.accel[b * stride..(b + 1) * stride],
+            );
             // With S_j the suffix sums of w_bj·|Δa_j|, the bound relative to level l is
             // Σ_{j≥l} |Δa_j|·((Ω_j − Ω_l)·w_bj + [j rotates]·S_j) = G_l − Ω_l·S_l + H_l, with
             // G_l = Σ_{j≥l} |Δa_j|·w_bj·Ω_j and H_l = Σ_{j≥l, rotations} |Δa_j|·S_j. Entries
             // from the body's level on are 0.
-            let level = body.level(b).min(dof);
             let (mut sum, mut g, mut h) = (0.0, 0.0, 0.0);
-            let terms = bounds.factors(b)[..level]
-                .iter()
-                .zip(&self.abs_delta[..level])
-                .zip(&self.rot_delta[..level])
-                .zip(&self.omega[..level])
-                .zip(suffix[..level].iter_mut().zip(&mut accel[..level]))
-                .rev();
-            for ((((w, d), r), omega_j), (s, a)) in terms {
-                sum += w * d;
-                *s = sum;
-                g += d * w * omega_j;
-                h += r * sum;
-                let x = (g - omega_j * sum).max(0.0) + h;
-                *a = x * (1.0 + 1e-9) + 1e-12;
+            let Some(whole) = bounds.body_runs(b) else {
+                // The body's level splits a link's axes: axis by axis.
+                let level = body.level(b).min(dof);
+                let terms = (&self.abs_delta[..], &self.rot_delta[..], &self.omega[..]);
+                rows_by_axis(bounds.factors(b), level, terms, suffix, accel);
+                continue;
+            };
+            // Link by link, entries at the links' first axes (the levels of bodies): within a
+            // run, Σ w_bj·|Δa_j| = w·rot + trans, G gains w·g_rot + g_trans, and H gains
+            // rot·S_after + w·h_rot + h_trans (S_after: the sum over the later links).
+            let factors = bounds.group_factors(b);
+            for r in (0..whole).rev() {
+                let (run, w, start) = (&self.runs[r], factors[r], groups[r].0);
+                h += run.rot * sum + w * run.h_rot + run.h_trans;
+                sum += w * run.rot + run.trans;
+                g += w * run.g_rot + run.g_trans;
+                suffix[start] = sum;
+                let x = (g - run.omega * sum).max(0.0) + h;
+                accel[start] = x * (1.0 + 1e-9) + 1e-12;
             }
         }
     }
@@ -379,6 +460,9 @@ pub(crate) struct Kept {
     /// Per body, a lower bound of its clearance and whether it is the exact clearance
     /// (`-∞`, false when unknown).
     clear: Vec<(f64, bool)>,
+    /// Per body, the obstacle found nearest there (`u32::MAX` when none is known): the first
+    /// one tried at a configuration close by.
+    near: Vec<u32>,
 }
 
 /// Records in `clear` what is now known of body `b`'s clearance: an exact value replaces
@@ -403,6 +487,7 @@ impl Kept {
             placed: Placed::default(),
             balls: Vec::new(),
             clear: Vec::new(),
+            near: Vec::new(),
         }
     }
 }
@@ -527,6 +612,8 @@ impl EdgeChecker for Certified {
             body.balls(&ka.frames, &ka.placed, &mut ka.balls);
             ka.clear.clear();
             ka.clear.resize(n, (f64::NEG_INFINITY, false));
+            ka.near.clear();
+            ka.near.resize(n, u32::MAX);
         }
         if !hit_b {
             super::fk_or_copy(chain, to, to_frames, &mut kb.frames, stats);
@@ -534,6 +621,8 @@ impl EdgeChecker for Certified {
             body.balls(&kb.frames, &kb.placed, &mut kb.balls);
             kb.clear.clear();
             kb.clear.resize(n, (f64::NEG_INFINITY, false));
+            kb.near.clear();
+            kb.near.resize(n, u32::MAX);
         }
         let (fa, fb) = (&ka.frames, &kb.frames);
         let (pa, pb) = (&ka.placed, &kb.placed);
@@ -565,10 +654,21 @@ impl EdgeChecker for Certified {
             let (c1, hint) = if exact1 {
                 (known1, u32::MAX)
             } else {
-                let (c1, hint) =
-                    body.clearance(scene, fb, pb, b, &kb.balls[b], bound + CAP_MARGIN, u32::MAX);
+                // The obstacle nearest at the start, when known, is likely nearest here.
+                let (c1, hint) = body.clearance(
+                    scene,
+                    fb,
+                    pb,
+                    b,
+                    &kb.balls[b],
+                    bound + CAP_MARGIN,
+                    ka.near[b],
+                );
                 // Exact when an obstacle was found below the cap, else a lower bound.
                 learn(&mut kb.clear, b, c1, hint != u32::MAX);
+                if hint != u32::MAX {
+                    kb.near[b] = hint;
+                }
                 (c1, hint)
             };
             if c1 <= 0.0 {
@@ -583,6 +683,9 @@ impl EdgeChecker for Certified {
             } else {
                 let (c0, h) = body.clearance(scene, fa, pa, b, &ka.balls[b], need, hint);
                 learn(&mut ka.clear, b, c0, h != u32::MAX);
+                if h != u32::MAX {
+                    ka.near[b] = h;
+                }
                 (c0, h)
             };
             if c0 <= 0.0 {
@@ -801,6 +904,25 @@ mod tests {
                 *bj = bj.clamp(f.range.min, f.range.max);
             }
             work.prepare(&bounds, &body, &a, &b);
+            // The link-by-link rows are the axis-by-axis ones at the levels of bodies.
+            for p in 0..body.len() {
+                let level = body.level(p).min(dof);
+                let (mut s_ref, mut a_ref) = (vec![0.0; dof + 1], vec![0.0; dof + 1]);
+                let terms = (&work.abs_delta[..], &work.rot_delta[..], &work.omega[..]);
+                rows_by_axis(bounds.factors(p), level, terms, &mut s_ref, &mut a_ref);
+                for l in std::iter::once(0).chain((0..body.len()).map(|o| body.level(o))) {
+                    let l = l.min(dof);
+                    let (s_got, a_got) = (work.relative(dof, p, l), work.accel(dof, p, l));
+                    assert!(
+                        (s_got - s_ref[l]).abs() <= 1e-12 * (1.0 + s_ref[l]),
+                        "{s_got}"
+                    );
+                    assert!(
+                        (a_got - a_ref[l]).abs() <= 1e-9 * (1.0 + a_ref[l]),
+                        "{a_got}"
+                    );
+                }
+            }
             let t0: f64 = rng.random_range(0.0..0.9);
             let t1: f64 = rng.random_range(t0 + 0.01..=1.0);
             let at = |t: f64, out: &mut Vec<f64>| {
@@ -819,7 +941,12 @@ mod tests {
             let span = t1 - t0;
             for qb in 0..body.segments() {
                 let lq = body.level(qb);
-                let from = rng.random_range(0..=lq);
+                // A level the checker asks for: 0 or a body's (the first axis of a link).
+                let levels: Vec<usize> = std::iter::once(0)
+                    .chain((0..body.len()).map(|p| body.level(p)))
+                    .filter(|&l| l <= lq)
+                    .collect();
+                let from = levels[rng.random_range(0..levels.len())];
                 let plain = work.relative(dof, qb, from);
                 assert!((plain - bounds.relative(qb, from, &work.delta)).abs() < 1e-12);
                 let accel = work.accel(dof, qb, from);
