@@ -30,6 +30,11 @@ pub struct MotionBounds {
     group_w: Vec<f64>,
     /// Per body: how many runs move it, or `None` when its level splits a run.
     body_runs: Vec<Option<usize>>,
+    /// Per level `0 ..= dof`: its row among [`MotionBounds::slots`] (see there).
+    slot: Vec<usize>,
+    /// Per run: the row of its first axis's level.
+    run_slots: Vec<usize>,
+    slots: usize,
 }
 
 impl MotionBounds {
@@ -81,7 +86,7 @@ impl MotionBounds {
                 group_w[b * groups.len() + g] = rot.map(|j| w[b * dof + j]).fold(0.0, f64::max);
             }
         }
-        let body_runs = (0..n)
+        let body_runs: Vec<Option<usize>> = (0..n)
             .map(|b| {
                 let level = body.level(b).min(dof);
                 let whole = groups.iter().take_while(|g| g.1 <= level).count();
@@ -89,6 +94,19 @@ impl MotionBounds {
                 (!split).then_some(whole)
             })
             .collect();
+        // Bounds are asked for at level 0 and at the levels of bodies: the runs' first axes and
+        // `dof`, unless some body's level splits a run (then at every level).
+        let (slot, slots) = if body_runs.iter().all(Option::is_some) {
+            let mut slot = vec![usize::MAX; dof + 1];
+            for (r, g) in groups.iter().enumerate() {
+                slot[g.0] = r;
+            }
+            slot[dof] = groups.len();
+            (slot, groups.len() + 1)
+        } else {
+            ((0..=dof).collect(), dof + 1)
+        };
+        let run_slots = groups.iter().map(|g| slot[g.0]).collect();
         MotionBounds {
             bodies: n,
             dof,
@@ -97,6 +115,9 @@ impl MotionBounds {
             groups,
             group_w,
             body_runs,
+            slot,
+            run_slots,
+            slots,
         }
     }
 
@@ -145,6 +166,26 @@ impl MotionBounds {
     #[inline]
     pub fn body_runs(&self, b: usize) -> Option<usize> {
         self.body_runs[b]
+    }
+
+    /// How many levels per body the bounds of a step are kept for: one per run of
+    /// [`MotionBounds::groups`] and one for `dof` (every level `0 ..= dof` when some body's
+    /// level splits a run).
+    #[inline]
+    pub fn slots(&self) -> usize {
+        self.slots
+    }
+
+    /// The row among [`MotionBounds::slots`] of level `level` (0, a body's level or `dof`).
+    #[inline]
+    pub fn slot(&self, level: usize) -> usize {
+        self.slot[level]
+    }
+
+    /// Per run of [`MotionBounds::groups`]: [`MotionBounds::slot`] of its first axis.
+    #[inline]
+    pub fn run_slots(&self) -> &[usize] {
+        &self.run_slots
     }
 
     /// Number of free axes covered.

@@ -251,15 +251,14 @@ fn relative_speed(
     speed(body, frames, placed, q, &t)
 }
 
-/// The suffix sums `S_l` of body `b`'s motion bound and its acceleration bounds `A_l` for
-/// every level `l` below `level`, axis by axis from the factors `w_bj` (`factors`) and, per
-/// axis, `(|Δa_j|, |Δa_j| for rotations else 0, Ω_j)` (`terms`).
+/// The suffix sums `S_l` of body `b`'s motion bound and its acceleration bounds `A_l`, as
+/// `rows[l] = [S_l, A_l]` for every level `l` below `level`, axis by axis from the factors
+/// `w_bj` (`factors`) and, per axis, `(|Δa_j|, |Δa_j| for rotations else 0, Ω_j)` (`terms`).
 fn rows_by_axis(
     factors: &[f64],
     level: usize,
     terms: (&[f64], &[f64], &[f64]),
-    suffix: &mut [f64],
-    accel: &mut [f64],
+    rows: &mut [[f64; 2]],
 ) {
     let (abs_delta, rot_delta, omega) = terms;
     let (mut sum, mut g, mut h) = (0.0, 0.0, 0.0);
@@ -268,15 +267,14 @@ fn rows_by_axis(
         .zip(&abs_delta[..level])
         .zip(&rot_delta[..level])
         .zip(&omega[..level])
-        .zip(suffix[..level].iter_mut().zip(&mut accel[..level]))
+        .zip(&mut rows[..level])
         .rev();
-    for ((((w, d), r), omega_j), (s, a)) in terms {
+    for ((((w, d), r), omega_j), row) in terms {
         sum += w * d;
-        *s = sum;
         g += d * w * omega_j;
         h += r * sum;
         let x = (g - omega_j * sum).max(0.0) + h;
-        *a = x * (1.0 + 1e-9) + 1e-12;
+        *row = [sum, x * (1.0 + 1e-9) + 1e-12];
     }
 }
 
@@ -302,12 +300,15 @@ struct Run {
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Work {
     pub(crate) delta: Vec<f64>,
-    /// Per body, the `dof + 1` suffix sums `Σ_{j ≥ i} w_bj·|Δa_j|` of its motion bound (entry `i`
-    /// is [`MotionBounds::relative`] from level `i`).
-    suffix: Vec<f64>,
-    /// Per body and level `l` (`dof + 1` entries): the bound on how fast the body's speed
-    /// relative to a body of level `l` changes along the edge.
-    accel: Vec<f64>,
+    /// Per body, [`MotionBounds::slots`] rows, one per level a bound is asked for (row
+    /// [`MotionBounds::slot`] of level `l`): `[S_l, A_l]`, the suffix sum `Σ_{j ≥ l} w_bj·|Δa_j|`
+    /// of its motion bound ([`MotionBounds::relative`] from level `l`) and the bound on how
+    /// fast the body's speed relative to a body of level `l` changes along the edge. Kept
+    /// together and compact: a step writes them all and reads few.
+    rows: Vec<[f64; 2]>,
+    /// [`MotionBounds::slot`] of every level `0 ..= dof`, and the rows per body.
+    slot: Vec<usize>,
+    slots: usize,
     /// `Ω_j`: the sum of `|Δa_k|` over the rotation axes `k < j`, for `j = 0 … dof`.
     omega: Vec<f64>,
     /// `|Δa_j|`, and the same for rotation axes only (0 for translations).
@@ -315,6 +316,8 @@ pub(crate) struct Work {
     rot_delta: Vec<f64>,
     /// Per run of one link's free axes ([`MotionBounds::groups`]), the sums the bounds need.
     runs: Vec<Run>,
+    /// The keys of the kept configurations' slots, one per slot.
+    keys: Vec<Key>,
     /// Counts the steps checked (the age of the kept configurations).
     clock: u64,
     twist_a: Vec<Twist>,
@@ -336,7 +339,6 @@ impl Work {
         to: &[f64],
     ) {
         let dof = bounds.dof();
-        let stride = dof + 1;
         if self.delta.len() != dof {
             // Sized once per scratch (whose chain is fixed), then overwritten per step.
             self.delta.resize(dof, 0.0);
@@ -361,13 +363,15 @@ impl Work {
             *om = omega;
         }
         let n = bounds.bodies();
-        if self.suffix.len() != n * stride {
+        let slots = bounds.slots();
+        if self.rows.len() != n * slots {
             // Sized once per scratch (whose chain and body are fixed); entries from a body's
             // level on stay 0, only those below it are rewritten per step.
-            self.suffix.clear();
-            self.suffix.resize(n * stride, 0.0);
-            self.accel.clear();
-            self.accel.resize(n * stride, 0.0);
+            self.rows.clear();
+            self.rows.resize(n * slots, [0.0; 2]);
+            self.slot.clear();
+            self.slot.extend((0..=dof).map(|l| bounds.slot(l)));
+            self.slots = slots;
         }
         // Per run of one link's axes (whose rotation factors are equal for every body): the
         // sums a body's bounds need from it, so that a body's row costs one term per link.
@@ -392,12 +396,8 @@ impl Work {
                 }
             }
         }
-        let groups = bounds.groups();
         for b in 0..n {
-            let (suffix, accel) = (
-                &mut self.suffix[b * stride..(b + 1) * stride],
-                &mut self.accel[b * stride..(b + 1) * stride],
-            );
+            let rows = &mut self.rows[b * slots..(b + 1) * slots];
             // With S_j the suffix sums of w_bj·|Δa_j|, the bound relative to level l is
             // Σ_{j≥l} |Δa_j|·((Ω_j − Ω_l)·w_bj + [j rotates]·S_j) = G_l − Ω_l·S_l + H_l, with
             // G_l = Σ_{j≥l} |Δa_j|·w_bj·Ω_j and H_l = Σ_{j≥l, rotations} |Δa_j|·S_j. Entries
@@ -407,21 +407,23 @@ impl Work {
                 // The body's level splits a link's axes: axis by axis.
                 let level = body.level(b).min(dof);
                 let terms = (&self.abs_delta[..], &self.rot_delta[..], &self.omega[..]);
-                rows_by_axis(bounds.factors(b), level, terms, suffix, accel);
+                rows_by_axis(bounds.factors(b), level, terms, rows);
                 continue;
             };
             // Link by link, entries at the links' first axes (the levels of bodies): within a
             // run, Σ w_bj·|Δa_j| = w·rot + trans, G gains w·g_rot + g_trans, and H gains
             // rot·S_after + w·h_rot + h_trans (S_after: the sum over the later links).
-            let factors = bounds.group_factors(b);
-            for r in (0..whole).rev() {
-                let (run, w, start) = (&self.runs[r], factors[r], groups[r].0);
+            let runs = self.runs[..whole]
+                .iter()
+                .zip(&bounds.group_factors(b)[..whole])
+                .zip(&bounds.run_slots()[..whole])
+                .rev();
+            for ((run, w), &at) in runs {
                 h += run.rot * sum + w * run.h_rot + run.h_trans;
                 sum += w * run.rot + run.trans;
                 g += w * run.g_rot + run.g_trans;
-                suffix[start] = sum;
                 let x = (g - run.omega * sum).max(0.0) + h;
-                accel[start] = x * (1.0 + 1e-9) + 1e-12;
+                rows[at] = [sum, x * (1.0 + 1e-9) + 1e-12];
             }
         }
     }
@@ -430,14 +432,14 @@ impl Work {
     /// first `level` axes (level 0: how far it moves), as [`MotionBounds::relative`].
     #[inline]
     pub(crate) fn relative(&self, dof: usize, q: usize, level: usize) -> f64 {
-        self.suffix[q * (dof + 1) + level.min(dof)]
+        self.rows[q * self.slots + self.slot[level.min(dof)]][0]
     }
 
     /// Bound on how fast the speed of body `q` relative to bodies moved by the first `level`
     /// axes changes along the edge.
     #[inline]
     fn accel(&self, dof: usize, q: usize, level: usize) -> f64 {
-        self.accel[q * (dof + 1) + level.min(dof)]
+        self.rows[q * self.slots + self.slot[level.min(dof)]][1]
     }
 }
 
@@ -452,8 +454,6 @@ pub(crate) struct Kept {
     config: Vec<f64>,
     /// The scene the clearances are against ([`CollisionScene::id`]; 0: an empty slot).
     scene: u64,
-    /// The step that last used it.
-    used: u64,
     frames: Frames,
     placed: Placed,
     balls: Vec<(Point3<f64>, f64)>,
@@ -482,7 +482,6 @@ impl Kept {
         Kept {
             config: Vec::new(),
             scene: 0,
-            used: 0,
             frames: chain.frames(),
             placed: Placed::default(),
             balls: Vec::new(),
@@ -492,29 +491,57 @@ impl Kept {
     }
 }
 
-/// The slot of `kept` that holds `config` for the scene `scene` (not `avoid`), and true; or
-/// else the least recently used other slot, emptied and set to `config`, and false.
-fn slot(kept: &mut [Kept], scene: u64, config: &[f64], avoid: usize, clock: u64) -> (usize, bool) {
-    let found = kept
-        .iter()
-        .enumerate()
-        .find(|(i, k)| *i != avoid && k.scene == scene && k.config.as_slice() == config)
-        .map(|(i, _)| i);
+/// What finds a kept configuration's slot: its scene, its last use and its first value, kept
+/// apart from the slots themselves so that a lookup reads a few cache lines.
+#[derive(Clone, Copy, Debug, Default)]
+struct Key {
+    scene: u64,
+    used: u64,
+    first: f64,
+}
+
+/// The slot of `kept` (with their `keys`) that holds `config` for the scene `scene` (not
+/// `avoid`), and true; or else the least recently used other slot, emptied and set to
+/// `config`, and false.
+fn slot(
+    keys: &mut Vec<Key>,
+    kept: &mut [Kept],
+    scene: u64,
+    config: &[f64],
+    avoid: usize,
+    clock: u64,
+) -> (usize, bool) {
+    if keys.len() != kept.len() {
+        keys.clear();
+        keys.extend(kept.iter().map(|k| Key {
+            scene: k.scene,
+            used: 0,
+            first: k.config.first().copied().unwrap_or(0.0),
+        }));
+    }
+    let first = config.first().copied().unwrap_or(0.0);
+    let found = keys.iter().enumerate().position(|(i, k)| {
+        i != avoid && k.scene == scene && k.first == first && kept[i].config == config
+    });
     if let Some(i) = found {
-        kept[i].used = clock;
+        keys[i].used = clock;
         return (i, true);
     }
-    let i = kept
+    let i = keys
         .iter()
         .enumerate()
         .filter(|(i, _)| *i != avoid)
         .min_by_key(|(_, k)| k.used)
         .map_or(0, |(i, _)| i);
+    keys[i] = Key {
+        scene,
+        used: clock,
+        first,
+    };
     let k = &mut kept[i];
     k.config.clear();
     k.config.extend_from_slice(config);
     k.scene = scene;
-    k.used = clock;
     (i, false)
 }
 
@@ -602,8 +629,8 @@ impl EdgeChecker for Certified {
         let id = scene.id();
         // A configuration evaluated by a recent step (the planner extends the nodes it has
         // just added) comes with its frames, placement and clearances.
-        let (ia, hit_a) = slot(kept, id, from, usize::MAX, work.clock);
-        let (ib, hit_b) = slot(kept, id, to, ia, work.clock);
+        let (ia, hit_a) = slot(&mut work.keys, kept, id, from, usize::MAX, work.clock);
+        let (ib, hit_b) = slot(&mut work.keys, kept, id, to, ia, work.clock);
         let (ka, kb) = two(kept, ia, ib);
         if !hit_a {
             stats.fk += 1;
@@ -907,20 +934,14 @@ mod tests {
             // The link-by-link rows are the axis-by-axis ones at the levels of bodies.
             for p in 0..body.len() {
                 let level = body.level(p).min(dof);
-                let (mut s_ref, mut a_ref) = (vec![0.0; dof + 1], vec![0.0; dof + 1]);
+                let mut want = vec![[0.0; 2]; dof + 1];
                 let terms = (&work.abs_delta[..], &work.rot_delta[..], &work.omega[..]);
-                rows_by_axis(bounds.factors(p), level, terms, &mut s_ref, &mut a_ref);
+                rows_by_axis(bounds.factors(p), level, terms, &mut want);
                 for l in std::iter::once(0).chain((0..body.len()).map(|o| body.level(o))) {
-                    let l = l.min(dof);
+                    let [s_ref, a_ref] = want[l.min(dof)];
                     let (s_got, a_got) = (work.relative(dof, p, l), work.accel(dof, p, l));
-                    assert!(
-                        (s_got - s_ref[l]).abs() <= 1e-12 * (1.0 + s_ref[l]),
-                        "{s_got}"
-                    );
-                    assert!(
-                        (a_got - a_ref[l]).abs() <= 1e-9 * (1.0 + a_ref[l]),
-                        "{a_got}"
-                    );
+                    assert!((s_got - s_ref).abs() <= 1e-12 * (1.0 + s_ref), "{s_got}");
+                    assert!((a_got - a_ref).abs() <= 1e-9 * (1.0 + a_ref), "{a_got}");
                 }
             }
             let t0: f64 = rng.random_range(0.0..0.9);
