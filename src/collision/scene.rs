@@ -364,9 +364,26 @@ impl CollisionScene {
             // of that moment (once the best has changed within a block, every later sphere of
             // the block is: a smaller best can only skip more, except where it turns the
             // reach negative).
-            let b = &self.blocks;
             let (mut best, mut nearest) = (cap, u32::MAX);
             let n = self.bounds.len();
+            if n < 2 * LANES {
+                // Fewer than two blocks: one by one.
+                for (k, (c, r)) in self.bounds.iter().enumerate() {
+                    let reach = best + r + radius;
+                    if k as u32 == skip
+                        || (reach > 0.0 && (c - center).norm_squared() >= reach * reach)
+                    {
+                        continue;
+                    }
+                    let d = dist(k, best);
+                    if d < best {
+                        best = d;
+                        nearest = k as u32;
+                    }
+                }
+                return (best, nearest);
+            }
+            let b = &self.blocks;
             let blocks = b.x.iter().zip(&b.y).zip(b.z.iter().zip(&b.r));
             for (block, ((x, y), (z, r))) in blocks.enumerate() {
                 // SAFETY: SSE2 is part of every x86_64 processor (the target's baseline).
@@ -727,14 +744,15 @@ mod tests {
     /// The blockwise linear pass gives what the plain pass over the obstacles one by one
     /// gives (the same distance and the same nearest obstacle), for scenes whose last block is
     /// partly filled, with and without an obstacle to skip, any cap, and balls that reach
-    /// into the spheres (a best below `−r` turns the reach negative).
+    /// into the spheres (a best below `−r` turns the reach negative); scenes of fewer than two
+    /// blocks take the plain pass itself.
     #[test]
     fn blockwise_linear_pass_is_the_plain_one() {
         use crate::world::Obstacle;
         use rand::{RngExt, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
         let mut checked = 0;
-        for n in [1usize, 3, 4, 5, 7, 13, 32] {
+        for n in [1usize, 3, 4, 5, 7, 8, 9, 11, 13, 32] {
             let obstacles = (0..n)
                 .map(|k| {
                     let c = Point3::from(nalgebra::Vector3::from_fn(|_, _| {

@@ -28,8 +28,11 @@ pub struct MotionBounds {
     /// Per body and run: the factor `w_bj` of the run's rotation axes (equal within a link;
     /// 0 for the runs that do not move the body).
     group_w: Vec<f64>,
-    /// Per body: how many runs move it, or `None` when its level splits a run.
+    /// Per body: how many runs move it, or `None` when its level splits a run or the links
+    /// have one free axis each on average (then its bounds are computed axis by axis).
     body_runs: Vec<Option<usize>>,
+    /// True when some body's bounds are computed link by link ([`MotionBounds::body_runs`]).
+    grouped: bool,
     /// Per level `0 ..= dof`: its row among [`MotionBounds::slots`] (see there).
     slot: Vec<usize>,
     /// Per run: the row of its first axis's level.
@@ -86,6 +89,9 @@ impl MotionBounds {
                 group_w[b * groups.len() + g] = rot.map(|j| w[b * dof + j]).fold(0.0, f64::max);
             }
         }
+        // Link by link pays where links have several free axes; with one per link the
+        // bounds are computed axis by axis (`None` for every body).
+        let grouped = dof >= 2 * groups.len();
         let body_runs: Vec<Option<usize>> = (0..n)
             .map(|b| {
                 let level = body.level(b).min(dof);
@@ -96,6 +102,7 @@ impl MotionBounds {
             .collect();
         // Bounds are asked for at level 0 and at the levels of bodies: the runs' first axes and
         // `dof`, unless some body's level splits a run (then at every level).
+        let body_runs = if grouped { body_runs } else { vec![None; n] };
         let (slot, slots) = if body_runs.iter().all(Option::is_some) {
             let mut slot = vec![usize::MAX; dof + 1];
             for (r, g) in groups.iter().enumerate() {
@@ -114,6 +121,7 @@ impl MotionBounds {
             column,
             groups,
             group_w,
+            grouped: body_runs.iter().any(Option::is_some),
             body_runs,
             slot,
             run_slots,
@@ -180,6 +188,12 @@ impl MotionBounds {
     #[inline]
     pub fn slot(&self, level: usize) -> usize {
         self.slot[level]
+    }
+
+    /// True when some body's bounds are computed link by link ([`MotionBounds::body_runs`]).
+    #[inline]
+    pub fn grouped(&self) -> bool {
+        self.grouped
     }
 
     /// Per run of [`MotionBounds::groups`]: [`MotionBounds::slot`] of its first axis.

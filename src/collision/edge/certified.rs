@@ -375,7 +375,12 @@ impl Work {
         }
         // Per run of one link's axes (whose rotation factors are equal for every body): the
         // sums a body's bounds need from it, so that a body's row costs one term per link.
-        for (&(start, end), run) in bounds.groups().iter().zip(&mut self.runs) {
+        let runs = if bounds.grouped() {
+            &mut self.runs[..]
+        } else {
+            &mut []
+        };
+        for (&(start, end), run) in bounds.groups().iter().zip(runs) {
             *run = Run {
                 omega: self.omega[start],
                 ..Run::default()
