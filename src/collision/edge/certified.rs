@@ -316,6 +316,9 @@ pub(crate) struct Work {
     rot_delta: Vec<f64>,
     /// Per run of one link's free axes ([`MotionBounds::groups`]), the sums the bounds need.
     runs: Vec<Run>,
+    /// Per body `q`, the motion bound of the step relative to the level of the self pairs
+    /// checked last and the relative speeds at its two ends (NaN until computed).
+    bounds_at: Vec<[f64; 3]>,
     /// The keys of the kept configurations' slots, one per slot.
     keys: Vec<Key>,
     /// Counts the steps checked (the age of the kept configurations).
@@ -738,9 +741,18 @@ impl EdgeChecker for Certified {
                 u1,
             });
         }
+        // The motion bound of body q relative to level l serves every pair (p, q) with p at
+        // level l; the pairs come ordered by p, so by level: kept per q for the current level.
+        work.bounds_at.clear();
+        work.bounds_at.resize(n, [f64::NAN; 3]);
+        let mut bounds_level = usize::MAX;
         for &(p, qb) in body.self_pairs() {
             let (p, qb) = (p as usize, qb as usize);
             let level = body.level(p);
+            if level != bounds_level {
+                work.bounds_at.fill([f64::NAN; 3]);
+                bounds_level = level;
+            }
             let plain = work.relative(dof, qb, level);
             // Lower bounds of the distance at both ends from the bounding balls (a proof
             // from lower bounds holds as one from the distances).
@@ -757,9 +769,13 @@ impl EdgeChecker for Certified {
                 continue;
             }
             let accel = work.accel(dof, qb, level);
-            let u0 = relative_speed(body, fa, pa, &work.twist_a, qb, level);
-            let u1 = relative_speed(body, fb, pb, &work.twist_b, qb, level);
-            let bound = motion(1.0, plain, u0, u1, accel);
+            let [mut bound, mut u0, mut u1] = work.bounds_at[qb];
+            if bound.is_nan() {
+                u0 = relative_speed(body, fa, pa, &work.twist_a, qb, level);
+                u1 = relative_speed(body, fb, pb, &work.twist_b, qb, level);
+                bound = motion(1.0, plain, u0, u1, accel);
+                work.bounds_at[qb] = [bound, u0, u1];
+            }
             if ball0 > bound || ball0 + ball1 > bound {
                 continue;
             }
