@@ -109,7 +109,7 @@ pub struct CollisionScene {
     /// Few obstacles, all with closed-form distances: searched by one linear pass.
     linear: bool,
     /// The bounding spheres of `bounds` in blocks, for the linear pass.
-    blocks: Blocks,
+    blocks: Vec<Block>,
     /// Distinct for every scene built ([`CollisionScene::id`]).
     id: u64,
 }
@@ -119,52 +119,46 @@ pub struct CollisionScene {
 /// (a mesh's distance costs too much to leave to its bounding sphere's pruning).
 const LINEAR_SCAN: usize = 48;
 
-/// Bounding spheres per block of [`Blocks`].
+/// Bounding spheres per [`Block`].
 const LANES: usize = 4;
 
-/// Bounding spheres as blocks of [`LANES`] centres and radii (structure of arrays), so that
-/// the linear pass of [`CollisionScene::nearest`] tests a block of them at once on the
-/// processor's vector lanes. The last block is filled up with copies of the last sphere,
-/// which the pass never reaches.
+/// [`LANES`] bounding spheres, centres and radii by coordinate (structure of arrays), so that
+/// the linear pass of [`CollisionScene::nearest`] tests them at once on the processor's vector
+/// lanes. The last block of a scene is filled up with copies of its last sphere, which the
+/// pass never reaches.
 #[derive(Clone, Debug, Default)]
-struct Blocks {
-    x: Vec<[f64; LANES]>,
-    y: Vec<[f64; LANES]>,
-    z: Vec<[f64; LANES]>,
-    r: Vec<[f64; LANES]>,
+struct Block {
+    x: [f64; LANES],
+    y: [f64; LANES],
+    z: [f64; LANES],
+    r: [f64; LANES],
 }
 
-impl Blocks {
-    /// The blocks of the spheres `(centre, radius)`.
-    fn new(spheres: &[(Point3<f64>, f64)]) -> Self {
-        let mut out = Blocks::default();
-        for block in spheres.chunks(LANES) {
+/// The blocks of the spheres `(centre, radius)`.
+fn blocks(spheres: &[(Point3<f64>, f64)]) -> Vec<Block> {
+    spheres
+        .chunks(LANES)
+        .map(|block| {
             let at = |i: usize| block[i.min(block.len() - 1)];
-            out.x.push(std::array::from_fn(|i| at(i).0.x));
-            out.y.push(std::array::from_fn(|i| at(i).0.y));
-            out.z.push(std::array::from_fn(|i| at(i).0.z));
-            out.r.push(std::array::from_fn(|i| at(i).1));
-        }
-        out
-    }
+            Block {
+                x: std::array::from_fn(|i| at(i).0.x),
+                y: std::array::from_fn(|i| at(i).0.y),
+                z: std::array::from_fn(|i| at(i).0.z),
+                r: std::array::from_fn(|i| at(i).1),
+            }
+        })
+        .collect()
 }
 
-/// Bit `i` is set when sphere `i` of a block (centres `x`, `y`, `z`, radii `r`) lies beyond
-/// `best` from the ball (`center`, `radius`): `reach > 0 and |c − center|² ≥ reach²` with
-/// `reach = best + r + radius`, evaluated in this order (the scalar test's rounding).
+/// Bit `i` is set when sphere `i` of `block` lies beyond `best` from the ball (`center`,
+/// `radius`): `reach > 0 and |c − center|² ≥ reach²` with `reach = best + r + radius`,
+/// evaluated in this order (the scalar test's rounding).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "sse2")]
 #[inline]
-fn skipped(
-    x: &[f64; LANES],
-    y: &[f64; LANES],
-    z: &[f64; LANES],
-    r: &[f64; LANES],
-    center: &Point3<f64>,
-    best: f64,
-    radius: f64,
-) -> u32 {
+fn skipped(block: &Block, center: &Point3<f64>, best: f64, radius: f64) -> u32 {
     use std::arch::x86_64::*;
+    let Block { x, y, z, r } = block;
     let (cx, cy, cz) = (
         _mm_set1_pd(center.x),
         _mm_set1_pd(center.y),
@@ -194,15 +188,8 @@ fn skipped(
 /// As the vector version: the same test, one sphere at a time.
 #[cfg(not(target_arch = "x86_64"))]
 #[inline(always)]
-fn skipped(
-    x: &[f64; LANES],
-    y: &[f64; LANES],
-    z: &[f64; LANES],
-    r: &[f64; LANES],
-    center: &Point3<f64>,
-    best: f64,
-    radius: f64,
-) -> u32 {
+fn skipped(block: &Block, center: &Point3<f64>, best: f64, radius: f64) -> u32 {
+    let Block { x, y, z, r } = block;
     let mut mask = 0;
     for i in 0..LANES {
         let (dx, dy, dz) = (x[i] - center.x, y[i] - center.y, z[i] - center.z);
@@ -273,11 +260,7 @@ impl CollisionScene {
             && exact
                 .iter()
                 .all(|e| matches!(e, Exact::Sphere { .. } | Exact::Capsule { .. }));
-        let blocks = if linear {
-            Blocks::new(&bounds)
-        } else {
-            Blocks::default()
-        };
+        let blocks = if linear { blocks(&bounds) } else { Vec::new() };
         CollisionScene {
             obstacles,
             exact,
@@ -366,31 +349,32 @@ impl CollisionScene {
             // reach negative).
             let (mut best, mut nearest) = (cap, u32::MAX);
             let n = self.bounds.len();
+            // Obstacle k's bounding sphere lies beyond `best` from the ball.
+            let beyond = |k: usize, best: f64| {
+                let (c, r) = &self.bounds[k];
+                let reach = best + r + radius;
+                reach > 0.0 && (c - center).norm_squared() >= reach * reach
+            };
+            // Obstacle k's distance, when it is below the best.
+            let below = |k: usize, best: f64| Some(dist(k, best)).filter(|d| *d < best);
             if n < 2 * LANES {
                 // Fewer than two blocks: one by one.
-                for (k, (c, r)) in self.bounds.iter().enumerate() {
-                    let reach = best + r + radius;
-                    if k as u32 == skip
-                        || (reach > 0.0 && (c - center).norm_squared() >= reach * reach)
-                    {
+                for k in 0..n {
+                    if k as u32 == skip || beyond(k, best) {
                         continue;
                     }
-                    let d = dist(k, best);
-                    if d < best {
-                        best = d;
-                        nearest = k as u32;
+                    if let Some(d) = below(k, best) {
+                        (best, nearest) = (d, k as u32);
                     }
                 }
                 return (best, nearest);
             }
-            let b = &self.blocks;
-            let blocks = b.x.iter().zip(&b.y).zip(b.z.iter().zip(&b.r));
-            for (block, ((x, y), (z, r))) in blocks.enumerate() {
+            for (block, spheres) in self.blocks.iter().enumerate() {
                 // SAFETY: SSE2 is part of every x86_64 processor (the target's baseline).
                 #[cfg(target_arch = "x86_64")]
-                let skipped = unsafe { skipped(x, y, z, r, center, best, radius) };
+                let skipped = unsafe { skipped(spheres, center, best, radius) };
                 #[cfg(not(target_arch = "x86_64"))]
-                let skipped = skipped(x, y, z, r, center, best, radius);
+                let skipped = skipped(spheres, center, best, radius);
                 if skipped == (1 << LANES) - 1 {
                     continue;
                 }
@@ -404,22 +388,17 @@ impl CollisionScene {
                     if k as u32 == skip {
                         continue;
                     }
-                    if best == start {
-                        // The block's test holds for this best.
-                        if !pass {
-                            continue;
-                        }
+                    // The block's test holds while the best is the one it was made with.
+                    let skip_it = if best == start {
+                        !pass
                     } else {
-                        let (c, r) = &self.bounds[k];
-                        let reach = best + r + radius;
-                        if reach > 0.0 && (c - center).norm_squared() >= reach * reach {
-                            continue;
-                        }
+                        beyond(k, best)
+                    };
+                    if skip_it {
+                        continue;
                     }
-                    let d = dist(k, best);
-                    if d < best {
-                        best = d;
-                        nearest = k as u32;
+                    if let Some(d) = below(k, best) {
+                        (best, nearest) = (d, k as u32);
                     }
                 }
             }
@@ -741,18 +720,18 @@ mod tests {
         );
     }
 
-    /// The blockwise linear pass gives what the plain pass over the obstacles one by one
-    /// gives (the same distance and the same nearest obstacle), for scenes whose last block is
-    /// partly filled, with and without an obstacle to skip, any cap, and balls that reach
-    /// into the spheres (a best below `−r` turns the reach negative); scenes of fewer than two
-    /// blocks take the plain pass itself.
+    /// The blockwise linear pass gives what measuring every obstacle gives (the same distance,
+    /// bit for bit, and the same nearest obstacle), for scenes whose last block is partly
+    /// filled and scenes of fewer than two blocks (searched one by one), with and without an
+    /// obstacle to skip, any cap, and balls that reach into the spheres (a best below `−r`
+    /// turns the reach negative).
     #[test]
     fn blockwise_linear_pass_is_the_plain_one() {
         use crate::world::Obstacle;
         use rand::{RngExt, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
         let mut checked = 0;
-        for n in [1usize, 3, 4, 5, 7, 8, 9, 11, 13, 32] {
+        for n in [1usize, 3, 4, 5, 7, 8, 9, 10, 11, 13, 32, 47] {
             let obstacles = (0..n)
                 .map(|k| {
                     let c = Point3::from(nalgebra::Vector3::from_fn(|_, _| {
@@ -763,7 +742,7 @@ mod tests {
                 .collect();
             let tasks = vec![Point3::new(5.0, 5.0, 5.0)];
             let s = CollisionScene::new(&Workspace::new(obstacles, tasks, 0.01).unwrap());
-            assert!(s.linear && s.blocks.x.len() == n.div_ceil(LANES));
+            assert!(s.linear && s.blocks.len() == n.div_ceil(LANES));
             for _ in 0..2000 {
                 let a = Point3::from(nalgebra::Vector3::from_fn(|_, _| {
                     rng.random_range(-1.2..1.2)
@@ -776,22 +755,13 @@ mod tests {
                 let skip = [u32::MAX, rng.random_range(0..n as u32)][rng.random_range(0..2)];
                 let dist = |k: usize, c: f64| s.distance_below(k, &a, &b, r, c);
                 let got = s.nearest(&center, radius, cap, skip, dist);
-                let (mut best, mut nearest) = (cap, u32::MAX);
-                for (k, (c, rk)) in s.bounds.iter().enumerate() {
-                    let reach = best + rk + radius;
-                    if k as u32 == skip
-                        || (reach > 0.0 && (c - center).norm_squared() >= reach * reach)
-                    {
-                        continue;
-                    }
-                    let d = dist(k, best);
-                    if d < best {
-                        best = d;
-                        nearest = k as u32;
-                    }
-                }
-                assert_eq!(got, (best, nearest), "{n} spheres");
-                checked += usize::from(nearest != u32::MAX);
+                // Every obstacle measured: the first nearest below the cap.
+                let want = (0..n)
+                    .filter(|&k| k as u32 != skip)
+                    .map(|k| (s.distance(k, &a, &b, r), k as u32))
+                    .fold((cap, u32::MAX), |m, x| if x.0 < m.0 { x } else { m });
+                assert_eq!(got, want, "{n} spheres");
+                checked += usize::from(want.1 != u32::MAX);
             }
         }
         assert!(checked > 5000, "{checked}");
