@@ -486,6 +486,18 @@ fn learn(clear: &mut [(f64, bool)], b: usize, value: f64, exact: bool) {
 }
 
 impl Kept {
+    /// With its frames just evaluated: the bodies placed, their balls, and nothing known of
+    /// their clearances yet.
+    fn evaluated(&mut self, body: &RobotBody) {
+        let n = body.len();
+        body.place(&self.frames, &mut self.placed);
+        body.balls(&self.frames, &self.placed, &mut self.balls);
+        self.clear.clear();
+        self.clear.resize(n, (f64::NEG_INFINITY, false));
+        self.near.clear();
+        self.near.resize(n, u32::MAX);
+    }
+
     fn new(chain: &Chain) -> Self {
         Kept {
             config: Vec::new(),
@@ -643,21 +655,11 @@ impl EdgeChecker for Certified {
         if !hit_a {
             stats.fk += 1;
             chain.fk(from, &mut ka.frames);
-            body.place(&ka.frames, &mut ka.placed);
-            body.balls(&ka.frames, &ka.placed, &mut ka.balls);
-            ka.clear.clear();
-            ka.clear.resize(n, (f64::NEG_INFINITY, false));
-            ka.near.clear();
-            ka.near.resize(n, u32::MAX);
+            ka.evaluated(body);
         }
         if !hit_b {
             super::fk_or_copy(chain, to, to_frames, &mut kb.frames, stats);
-            body.place(&kb.frames, &mut kb.placed);
-            body.balls(&kb.frames, &kb.placed, &mut kb.balls);
-            kb.clear.clear();
-            kb.clear.resize(n, (f64::NEG_INFINITY, false));
-            kb.near.clear();
-            kb.near.resize(n, u32::MAX);
+            kb.evaluated(body);
         }
         let (fa, fb) = (&ka.frames, &kb.frames);
         let (pa, pb) = (&ka.placed, &kb.placed);
