@@ -171,7 +171,6 @@ impl EdgeChecker for Ccd {
         } = scratch;
         let body = &**body;
         let ns = body.segments();
-        let dof = bounds.dof();
         work.prepare(bounds, body, from, to);
         let n = substeps(chain, &work.delta);
         stats.fk += 1;
@@ -187,7 +186,7 @@ impl EdgeChecker for Ccd {
             body.place(fb, pb);
             motions(body, fa, fb, moving);
             for (b, m) in moving.iter().enumerate() {
-                let step_reach = work.relative(dof, b, 0) / n as f64;
+                let step_reach = work.relative(bounds, b, 0) / n as f64;
                 let capsule;
                 let shape: &dyn Shape = if b < ns {
                     capsule = Capsule::new(
@@ -226,7 +225,7 @@ impl EdgeChecker for Ccd {
             }
             for &(p, qb) in body.self_pairs() {
                 let (p, qb) = (p as usize, qb as usize);
-                let reach = work.relative(dof, qb, body.level(p)) / n as f64;
+                let reach = work.relative(bounds, qb, body.level(p)) / n as f64;
                 let (cp, rp) = body.ball(fa, pa, p);
                 let (cq, rq) = body.ball(fa, pa, qb);
                 if (cp - cq).norm() - rp - rq > reach {

@@ -306,9 +306,6 @@ pub(crate) struct Work {
     /// fast the body's speed relative to a body of level `l` changes along the edge. Kept
     /// together and compact: a step writes them all and reads few.
     rows: Vec<[f64; 2]>,
-    /// [`MotionBounds::slot`] of every level `0 ..= dof`, and the rows per body.
-    slot: Vec<usize>,
-    slots: usize,
     /// `Ω_j`: the sum of `|Δa_k|` over the rotation axes `k < j`, for `j = 0 … dof`.
     omega: Vec<f64>,
     /// `|Δa_j|`, and the same for rotation axes only (0 for translations).
@@ -372,9 +369,6 @@ impl Work {
             // level on stay 0, only those below it are rewritten per step.
             self.rows.clear();
             self.rows.resize(n * slots, [0.0; 2]);
-            self.slot.clear();
-            self.slot.extend((0..=dof).map(|l| bounds.slot(l)));
-            self.slots = slots;
         }
         // Per run of one link's axes (whose rotation factors are equal for every body): the
         // sums a body's bounds need from it, so that a body's row costs one term per link.
@@ -439,15 +433,15 @@ impl Work {
     /// Bound on how far body `q` moves over the whole step relative to bodies moved by the
     /// first `level` axes (level 0: how far it moves), as [`MotionBounds::relative`].
     #[inline]
-    pub(crate) fn relative(&self, dof: usize, q: usize, level: usize) -> f64 {
-        self.rows[q * self.slots + self.slot[level.min(dof)]][0]
+    pub(crate) fn relative(&self, bounds: &MotionBounds, q: usize, level: usize) -> f64 {
+        self.rows[q * bounds.slots() + bounds.slot(level.min(bounds.dof()))][0]
     }
 
     /// Bound on how fast the speed of body `q` relative to bodies moved by the first `level`
     /// axes changes along the edge.
     #[inline]
-    fn accel(&self, dof: usize, q: usize, level: usize) -> f64 {
-        self.rows[q * self.slots + self.slot[level.min(dof)]][1]
+    fn accel(&self, bounds: &MotionBounds, q: usize, level: usize) -> f64 {
+        self.rows[q * bounds.slots() + bounds.slot(level.min(bounds.dof()))][1]
     }
 }
 
@@ -636,7 +630,6 @@ impl EdgeChecker for Certified {
             ..
         } = scratch;
         let body = &**body;
-        let dof = bounds.dof();
         work.prepare(bounds, body, from, to);
         work.items.clear();
         work.stack.clear();
@@ -669,9 +662,9 @@ impl EdgeChecker for Certified {
         // body. c1 > D proves the whole step; otherwise c0 > D − c1 does. From the tip: the
         // bodies that move most are the likeliest to block the step.
         for b in (0..body.len()).rev() {
-            let plain = work.relative(dof, b, 0);
+            let plain = work.relative(bounds, b, 0);
             let level = body.level(b);
-            let accel = work.accel(dof, b, 0);
+            let accel = work.accel(bounds, b, 0);
             let u0 = speed(body, fa, pa, b, &work.twist_a[level]);
             let u1 = speed(body, fb, pb, b, &work.twist_b[level]);
             let bound = motion(1.0, plain, u0, u1, accel);
@@ -755,7 +748,7 @@ impl EdgeChecker for Certified {
                 work.bounds_at.fill([f64::NAN; 3]);
                 bounds_level = level;
             }
-            let plain = work.relative(dof, qb, level);
+            let plain = work.relative(bounds, qb, level);
             // Lower bounds of the distance at both ends from the bounding balls (a proof
             // from lower bounds holds as one from the distances).
             let ball = |balls: &[(Point3<f64>, f64)]| {
@@ -770,7 +763,7 @@ impl EdgeChecker for Certified {
             if ball0 + ball1 > plain {
                 continue;
             }
-            let accel = work.accel(dof, qb, level);
+            let accel = work.accel(bounds, qb, level);
             let [mut bound, mut u0, mut u1] = work.bounds_at[qb];
             if bound.is_nan() {
                 u0 = relative_speed(body, fa, pa, &work.twist_a, qb, level);
@@ -962,7 +955,7 @@ mod tests {
                 rows_by_axis(bounds.factors(p), level, terms, &mut want);
                 for l in std::iter::once(0).chain((0..body.len()).map(|o| body.level(o))) {
                     let [s_ref, a_ref] = want[l.min(dof)];
-                    let (s_got, a_got) = (work.relative(dof, p, l), work.accel(dof, p, l));
+                    let (s_got, a_got) = (work.relative(&bounds, p, l), work.accel(&bounds, p, l));
                     assert!((s_got - s_ref).abs() <= 1e-12 * (1.0 + s_ref), "{s_got}");
                     assert!((a_got - a_ref).abs() <= 1e-9 * (1.0 + a_ref), "{a_got}");
                 }
@@ -991,9 +984,9 @@ mod tests {
                     .filter(|&l| l <= lq)
                     .collect();
                 let from = levels[rng.random_range(0..levels.len())];
-                let plain = work.relative(dof, qb, from);
+                let plain = work.relative(&bounds, qb, from);
                 assert!((plain - bounds.relative(qb, from, &work.delta)).abs() < 1e-12);
-                let accel = work.accel(dof, qb, from);
+                let accel = work.accel(&bounds, qb, from);
                 let u0 = speed(&body, &f0, &p0, qb, &tw0[lq].minus(&tw0[from]));
                 let u1 = speed(&body, &f1, &p1, qb, &tw1[lq].minus(&tw1[from]));
                 let bound = motion(span, plain, u0, u1, accel);
