@@ -112,8 +112,8 @@ fn the_tcp_is_the_last_frame_times_the_tool_and_the_bound_covers_it() {
     chain.fk(&q, &mut f);
     let mut lin = vec![0.0; 3 * chain.dof()];
     let mut ang = vec![0.0; 3 * chain.dof()];
-    chain.jacobian(&q, &f, &mut lin);
-    chain.angular_jacobian(&q, &f, &mut ang);
+    chain.jacobian(&f, &mut lin);
+    chain.angular_jacobian(&f, &mut ang);
     let h = 1e-6;
     for k in 0..chain.dof() {
         let (mut qp, mut qm) = (q.clone(), q.clone());

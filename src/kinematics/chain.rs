@@ -693,66 +693,51 @@ impl Chain {
 
     /// The position Jacobian of the end effector (the TCP), `∂p_ee/∂a` (3 × dof, column-major:
     /// column `k` at `out[3k..3k+3]`), at the configuration whose frames are in `frames` (from
-    /// [`Chain::fk`] with the same `a`). For a rotation axis the column is `ω̂ × (p_ee − o)`
-    /// with `ω̂` the axis direction after the link's earlier rotations and `o` the joint origin;
-    /// for a translation axis it is the axis direction. Allocation-free.
-    pub fn jacobian(&self, a: &[f64], frames: &Frames, out: &mut [f64]) {
+    /// [`Chain::fk`]). For a rotation axis the column is `ω̂ × (p_ee − o)` with `ω̂` the axis
+    /// direction after the link's earlier rotations and `o` the joint origin; for a translation
+    /// axis it is the axis direction. Both directions are read from the frame right after the
+    /// axis ([`Frames::axis_frames`]: a rotation leaves its own axis unchanged, a translation
+    /// every axis), so no angle is evaluated again. Allocation-free.
+    pub fn jacobian(&self, frames: &Frames, out: &mut [f64]) {
         debug_assert_eq!(out.len(), 3 * self.free.len());
         let ee = frames.end_effector().coords;
-        let mut rot: Matrix3<f64> = *self.base.rotation.matrix();
         for (i, link) in self.links.iter().enumerate() {
-            if !link.identity_rotation {
-                rot *= link.transform.rotation.matrix();
-            }
             let origin = frames.joints[i].coords;
             for op in &self.ops[link.ops.clone()] {
                 match *op {
-                    Op::RotConst { axis, s, c } => rotate_local(&mut rot, axis, s, c),
                     Op::RotFree { axis, k } => {
-                        let w = rot.column(axis.index()).into_owned();
+                        let w = frames.axis_frames[k].rotation.matrix().column(axis.index());
                         let col = w.cross(&(ee - origin));
                         out[3 * k..3 * k + 3].copy_from_slice(col.as_slice());
-                        let (s, c) = libm::sincos(a[k]);
-                        rotate_local(&mut rot, axis, s, c);
                     }
-                    Op::TransConst { .. } => {}
                     Op::TransFree { axis, k, .. } => {
-                        let d = rot.column(axis.index() - 3).into_owned();
+                        let d = frames.axis_frames[k]
+                            .rotation
+                            .matrix()
+                            .column(axis.index() - 3);
                         out[3 * k..3 * k + 3].copy_from_slice(d.as_slice());
                     }
+                    Op::RotConst { .. } | Op::TransConst { .. } => {}
                 }
             }
-            // The next link starts from F_i, whose rotation is `rot` (translations do not
-            // rotate); re-sync with the stored frame to avoid drift.
-            rot = *frames.frames[i + 1].rotation.matrix();
         }
     }
 
     /// The angular Jacobian of the tool frame (3 × dof, column-major as [`Chain::jacobian`]):
     /// the world angular velocity per unit of each free axis, `ω̂` for a rotation axis and zero
     /// for a translation axis, at the configuration whose frames are in `frames` (from
-    /// [`Chain::fk`] with the same `a`). Allocation-free.
-    pub fn angular_jacobian(&self, a: &[f64], frames: &Frames, out: &mut [f64]) {
+    /// [`Chain::fk`]), read from the axis frames as in [`Chain::jacobian`]. Allocation-free.
+    pub fn angular_jacobian(&self, frames: &Frames, out: &mut [f64]) {
         debug_assert_eq!(out.len(), 3 * self.free.len());
-        let mut rot: Matrix3<f64> = *self.base.rotation.matrix();
-        for (i, link) in self.links.iter().enumerate() {
-            if !link.identity_rotation {
-                rot *= link.transform.rotation.matrix();
-            }
-            for op in &self.ops[link.ops.clone()] {
-                match *op {
-                    Op::RotConst { axis, s, c } => rotate_local(&mut rot, axis, s, c),
-                    Op::RotFree { axis, k } => {
-                        let w = rot.column(axis.index()).into_owned();
-                        out[3 * k..3 * k + 3].copy_from_slice(w.as_slice());
-                        let (s, c) = libm::sincos(a[k]);
-                        rotate_local(&mut rot, axis, s, c);
-                    }
-                    Op::TransConst { .. } => {}
-                    Op::TransFree { k, .. } => out[3 * k..3 * k + 3].fill(0.0),
+        for op in &self.ops {
+            match *op {
+                Op::RotFree { axis, k } => {
+                    let w = frames.axis_frames[k].rotation.matrix().column(axis.index());
+                    out[3 * k..3 * k + 3].copy_from_slice(w.as_slice());
                 }
+                Op::TransFree { k, .. } => out[3 * k..3 * k + 3].fill(0.0),
+                Op::RotConst { .. } | Op::TransConst { .. } => {}
             }
-            rot = *frames.frames[i + 1].rotation.matrix();
         }
     }
 
@@ -902,7 +887,7 @@ mod tests {
         let mut f = chain.frames();
         chain.fk(&a, &mut f);
         let mut jac = vec![0.0; 3 * chain.dof()];
-        chain.jacobian(&a, &f, &mut jac);
+        chain.jacobian(&f, &mut jac);
         let h = 1e-6;
         for k in 0..chain.dof() {
             let (mut ap, mut am) = (a.clone(), a.clone());

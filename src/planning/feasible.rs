@@ -33,7 +33,7 @@ pub fn impossible_orientation(chain: &Chain, orientation: &TaskOrientation) -> O
     chain.fk(home, &mut frames);
     let r0 = *frames.tcp_rotation();
     let mut ang = vec![0.0; 3 * chain.dof()];
-    chain.angular_jacobian(home, &frames, &mut ang);
+    chain.angular_jacobian(&frames, &mut ang);
     let axes: Vec<Vector3<f64>> = ang
         .chunks_exact(3)
         .map(|c| Vector3::new(c[0], c[1], c[2]))

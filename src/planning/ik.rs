@@ -54,7 +54,7 @@ pub fn dls(
         if err <= tolerance || chain.dof() == 0 {
             break;
         }
-        chain.jacobian(&work.q, &work.frames, &mut work.jac);
+        chain.jacobian(&work.frames, &mut work.jac);
         let mut jjt = Matrix3::from_diagonal_element(DAMPING * DAMPING);
         for col in work.jac.chunks_exact(3) {
             let c = Vector3::new(col[0], col[1], col[2]);
@@ -127,8 +127,8 @@ pub fn dls_oriented(
         if (err <= tolerance && er == Vector3::zeros()) || chain.dof() == 0 {
             break;
         }
-        chain.jacobian(&work.q, &work.frames, &mut work.jac);
-        chain.angular_jacobian(&work.q, &work.frames, &mut work.ang);
+        chain.jacobian(&work.frames, &mut work.jac);
+        chain.angular_jacobian(&work.frames, &mut work.ang);
         let z = r.column(2).into_owned();
         let project = |w: Vector3<f64>| if approach { w - z * z.dot(&w) } else { w };
         let column = |lin: &[f64], ang: &[f64]| {
