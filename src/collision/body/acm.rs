@@ -23,6 +23,7 @@
 
 use super::model::{Placed, RobotBody};
 use crate::kinematics::Chain;
+use nalgebra::Point3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -187,14 +188,17 @@ impl AllowedCollisions {
         }
         let mut frames = chain.frames();
         let mut placed = Placed::default();
+        let mut balls = Vec::with_capacity(body.len());
         chain.fk(chain.home(), &mut frames);
         body.place(&frames, &mut placed);
-        // Contact between two groups; bounding balls cull pairs that are clearly apart.
-        let contact = |frames: &_, placed: &_, i: usize, j: usize| -> bool {
+        body.balls(&frames, &placed, &mut balls);
+        // Contact between two groups; bounding balls (`balls`, of the same configuration)
+        // cull pairs that are clearly apart.
+        let contact = |frames: &_, placed: &_, balls: &[(Point3<f64>, f64)], i: usize, j: usize| {
             groups[i].bodies.iter().any(|&p| {
-                let (cp, rp) = body.ball(frames, placed, p);
+                let (cp, rp) = balls[p];
                 groups[j].bodies.iter().any(|&q| {
-                    let (cq, rq) = body.ball(frames, placed, q);
+                    let (cq, rq) = balls[q];
                     let gap = rp + rq;
                     (cp - cq).norm_squared() <= gap * gap
                         && body.pair_distance(frames, placed, p, q) <= 0.0
@@ -207,7 +211,7 @@ impl AllowedCollisions {
                 if reason[idx(i, j)].is_some() {
                     continue;
                 }
-                if contact(&frames, &placed, i, j) {
+                if contact(&frames, &placed, &balls, i, j) {
                     reason[idx(i, j)] = Some(Reason::Default);
                     if home_fold.is_none() {
                         'fold: for &p in &groups[i].bodies {
@@ -248,8 +252,9 @@ impl AllowedCollisions {
                 chain.sample_config(&mut rng, &mut q);
                 chain.fk(&q, &mut frames);
                 body.place(&frames, &mut placed);
+                body.balls(&frames, &placed, &mut balls);
                 for c in candidates.iter_mut() {
-                    if contact(&frames, &placed, c.0, c.1) {
+                    if contact(&frames, &placed, &balls, c.0, c.1) {
                         c.2 += 1;
                     } else {
                         c.3 += 1;
