@@ -755,10 +755,14 @@ impl EdgeChecker for Certified {
                 let ((cp, rp), (cq, rq)) = (balls[p], balls[qb]);
                 (cp - cq).norm() - rp - rq
             };
-            let ball0 = ball(&ka.balls);
-            if ball0 > plain {
+            // The start's balls alone prove most pairs: |cp − cq| > plain + rp + rq, compared
+            // squared (both sides are ≥ 0), so that no square root is taken for them.
+            let ((cp, rp), (cq, rq)) = (ka.balls[p], ka.balls[qb]);
+            let gap = plain + rp + rq;
+            if (cp - cq).norm_squared() > gap * gap {
                 continue;
             }
+            let ball0 = ball(&ka.balls);
             let ball1 = ball(&kb.balls);
             if ball0 + ball1 > plain {
                 continue;
