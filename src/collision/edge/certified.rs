@@ -750,20 +750,17 @@ impl EdgeChecker for Certified {
             }
             let plain = work.relative(bounds, qb, level);
             // Lower bounds of the distance at both ends from the bounding balls (a proof
-            // from lower bounds holds as one from the distances).
-            let ball = |balls: &[(Point3<f64>, f64)]| {
-                let ((cp, rp), (cq, rq)) = (balls[p], balls[qb]);
-                (cp - cq).norm() - rp - rq
-            };
-            // The start's balls alone prove most pairs: |cp − cq| > plain + rp + rq, compared
-            // squared (both sides are ≥ 0), so that no square root is taken for them.
+            // from lower bounds holds as one from the distances). The start's alone proves
+            // most pairs: |cp − cq| > plain + rp + rq, compared squared (both sides are ≥ 0),
+            // so that no square root is taken for them.
             let ((cp, rp), (cq, rq)) = (ka.balls[p], ka.balls[qb]);
             let gap = plain + rp + rq;
             if (cp - cq).norm_squared() > gap * gap {
                 continue;
             }
-            let ball0 = ball(&ka.balls);
-            let ball1 = ball(&kb.balls);
+            let ball0 = (cp - cq).norm() - rp - rq;
+            let ((cp, rp), (cq, rq)) = (kb.balls[p], kb.balls[qb]);
+            let ball1 = (cp - cq).norm() - rp - rq;
             if ball0 + ball1 > plain {
                 continue;
             }
