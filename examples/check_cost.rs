@@ -13,7 +13,8 @@
 //! `reach` runs the reachability of the largest design with planner seeds 0–9 in turn, `REPS`
 //! runs (default 100) per checker at π/4, and prints the mean time per run; the scenario
 //! defaults to the bundled paper-3d. Set `CHECKER=segment` or `CHECKER=certified` to run only
-//! one. Under `valgrind --tool=cachegrind`, the instruction count of a run with `REPS` minus
+//! one, and `PLANNER_OPTIONS=on` to plan with `planner.ik_hold_limits` and
+//! `planner.aimed_steering`. Under `valgrind --tool=cachegrind`, the instruction count of a run with `REPS` minus
 //! that of a run with 0 (the set-up alone), divided by the number of edges or runs, is the
 //! instruction cost the README quotes.
 
@@ -45,6 +46,7 @@ fn main() {
             }
         }
     };
+    let options = std::env::var("PLANNER_OPTIONS").is_ok_and(|v| v == "on");
     let load = |path: &str| Scenario::load(Path::new(path)).expect("scenario");
     match mode {
         "edges" => {
@@ -87,6 +89,10 @@ fn main() {
                 let mut config = s.planner.clone();
                 config.checker = kind;
                 config.l_max = std::f64::consts::FRAC_PI_4;
+                if options {
+                    config.ik_hold_limits = true;
+                    config.aimed_steering = true;
+                }
                 let start = Instant::now();
                 let mut reached = 0.0;
                 for i in 0..reps {

@@ -14,7 +14,7 @@
 //! cargo run --release --example reach_presets -- [--checker certified|segment|discrete|ccd]
 //!     [--design largest|middle|smallest|random] [--iterations N] [--postures N]
 //!     [--budget-growth N] [--presets A-B] [--seeds A-B] [--preset paper-2d|paper-3d]
-//!     [--repeat N] [--verbose]
+//!     [--repeat N] [--planner-options] [--verbose]
 //! ```
 //!
 //! `--design middle` decodes the middle of every variable's bounds, `smallest` their lower
@@ -22,7 +22,8 @@
 //! (as in an optimiser's first generation). `--iterations`, `--postures` and `--budget-growth`
 //! override `planner.max_iterations`, `planner.postures` and `planner.budget_growth`.
 //! `--repeat N` runs everything N times and reports the smallest time of each preset (the
-//! results are the same every time), which is steadier on a busy machine. `--verbose` adds a
+//! results are the same every time), which is steadier on a busy machine. `--planner-options`
+//! turns on `planner.ik_hold_limits` and `planner.aimed_steering`. `--verbose` adds a
 //! line per unreached task with the tree's closest approach.
 
 use kinsynth::collision::{CheckerKind, CollisionScene};
@@ -84,6 +85,8 @@ struct Settings {
     iterations: Option<usize>,
     postures: Option<usize>,
     budget_growth: Option<usize>,
+    /// `planner.ik_hold_limits` and `planner.aimed_steering` on.
+    options: bool,
 }
 
 /// What the planner seeds gave on one preset.
@@ -118,6 +121,10 @@ fn run_preset(
     }
     if let Some(n) = settings.budget_growth {
         config.budget_growth = n;
+    }
+    if settings.options {
+        config.ik_hold_limits = true;
+        config.aimed_steering = true;
     }
     config.validate().expect("valid planner settings");
     let chains: Vec<_> = seeds
@@ -163,6 +170,7 @@ fn main() {
         iterations: None,
         postures: None,
         budget_growth: None,
+        options: false,
     };
     let mut which = "largest".to_string();
     let mut presets = 1..=10u64;
@@ -174,6 +182,10 @@ fn main() {
     while let Some(flag) = args.next() {
         if flag == "--verbose" {
             verbose = true;
+            continue;
+        }
+        if flag == "--planner-options" {
+            settings.options = true;
             continue;
         }
         let value = args

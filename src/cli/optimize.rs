@@ -218,9 +218,12 @@ pub fn prepare(args: &Args) -> Result<Prepared, kinsynth::Error> {
                 planner.checker = kinsynth::collision::CheckerKind::Discrete;
                 planner.l_max = std::f64::consts::PI / 40.0;
                 planner.schedule = None;
-                // The paper's RRT: from home alone, within the fixed budget.
+                // The paper's RRT: from home alone, within the fixed budget, its inverse
+                // kinematics clamping whole steps into the ranges, each step tried whole first.
                 planner.postures = 0;
                 planner.budget_growth = 1;
+                planner.ik_hold_limits = false;
+                planner.aimed_steering = false;
             }
             if let Some(a) = optimizer {
                 algorithm = a;

@@ -23,8 +23,10 @@ pub struct Method {
     pub checker: CheckerKind,
     /// Step bound `L_max`.
     pub l_max: f64,
-    /// Plan as the paper's RRT does: from home alone, within the fixed iteration budget
-    /// (`postures = 0`, `budget_growth = 1`); otherwise with the scenario's planner settings.
+    /// Plan as the paper's RRT does: from home alone, within the fixed iteration budget, its
+    /// inverse kinematics clamping whole steps into the ranges, each step tried whole first
+    /// (`postures = 0`, `budget_growth = 1`, `ik_hold_limits = false`, `aimed_steering =
+    /// false`); otherwise with the scenario's planner settings.
     pub paper_planner: bool,
 }
 
@@ -242,6 +244,8 @@ pub fn run_experiment(
             if m.paper_planner {
                 planner.postures = 0;
                 planner.budget_growth = 1;
+                planner.ik_hold_limits = false;
+                planner.aimed_steering = false;
             }
             let options = RunOptions {
                 algorithm: m.algorithm,

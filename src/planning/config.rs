@@ -43,6 +43,21 @@ pub struct PlannerConfig {
     /// posture that reaches the task until it joins the tree from home. 0 plans with the tree
     /// from home alone. Default 1.
     pub postures: usize,
+    /// Hold still, in the inverse kinematics, an axis at a limit of its range that a step
+    /// pushes further out, and solve the step again without it ([`crate::planning::ik::dls`]):
+    /// the other axes make up for it within the step and the error falls quadratically.
+    /// `false` clamps the whole step into the ranges, as the paper's planner does, which cuts
+    /// every step short once an axis saturates. Default false (it changes the plans, and so
+    /// the optimiser's results).
+    #[serde(skip_serializing_if = "is_false")]
+    pub ik_hold_limits: bool,
+    /// Aim each steering try by the metric's growth per unit of actuation-space distance seen
+    /// in the try before (the first by the previous steering), re-aiming a first try that
+    /// lands below [`crate::planning::rrt::STEER_SHORT`]` × L_max` once: most steps then take
+    /// one or two kinematics evaluations instead of about three. `false` tries the whole step
+    /// first. Default false (it changes the plans, and so the optimiser's results).
+    #[serde(skip_serializing_if = "is_false")]
+    pub aimed_steering: bool,
     /// How far the iteration budget grows: while an unreached task has a backward tree (a
     /// collision-free posture on it is known), a run may use up to `budget_growth ×
     /// max_iterations` iterations (at most [`MAX_ITERATIONS`]); otherwise it stops at
@@ -59,6 +74,10 @@ pub struct PlannerConfig {
 
 /// Default [`PlannerConfig::orientation_weight`] (metres per radian).
 pub const DEFAULT_ORIENTATION_WEIGHT: f64 = 0.1;
+
+fn is_false(b: &bool) -> bool {
+    !*b
+}
 
 fn is_default_orientation_weight(w: &f64) -> bool {
     *w == DEFAULT_ORIENTATION_WEIGHT
@@ -167,6 +186,8 @@ impl Default for PlannerConfig {
             time_limit: None,
             ik_steps: 20,
             postures: 1,
+            ik_hold_limits: false,
+            aimed_steering: false,
             budget_growth: 5,
             schedule: None,
             self_collision: SelfCollisionConfig::default(),

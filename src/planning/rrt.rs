@@ -18,6 +18,14 @@ use std::time::Instant;
 /// other tree when a forward and a backward tree try to join.
 pub const CONNECT_STEPS: usize = 25;
 
+/// Share of `L_max` that a steering try aims the metric at (paper Eq. 10), just inside the
+/// bound since the metric is only about linear in the step.
+pub const STEER_AIM: f64 = 0.95;
+
+/// Share of `L_max` below which an aimed steering's first try is aimed again (longer), with
+/// [`PlannerConfig::aimed_steering`].
+pub const STEER_SHORT: f64 = 0.8;
+
 /// The tree: configurations, their joint positions `f(a)`, end effectors (TCP positions) and TCP
 /// rotations, and parents (the root is its own parent; a grafted branch can have parents of
 /// higher index than itself).
@@ -223,6 +231,9 @@ struct Work {
     q_goal: Vec<f64>,
     q_join: Vec<f64>,
     ik: IkWork,
+    /// The metric (paper Eq. 10) per unit of actuation-space distance of the last steering
+    /// try (0 before the first): the first try of the next one aims by it.
+    slope: f64,
 }
 
 /// `‖f(b) − f(a)‖ + λ‖b − a‖` (paper Eq. 10) from stored joint positions.
@@ -335,13 +346,28 @@ impl<'a> Rrt<'a> {
     /// Eq. 10 is within `L_max`; the candidate is left in `work.q_new` with its frames in
     /// `work.frames`. Returns `None` when no progress is possible, else whether the step goes
     /// the whole way to `target`.
+    ///
+    /// The metric grows about linearly with the step, so each cut aims at [`STEER_AIM`]` ×
+    /// L_max` by the metric of the try before. The first try is the whole step, or with
+    /// [`PlannerConfig::aimed_steering`] it is aimed the same way by the metric per unit of
+    /// actuation-space distance of the last steering (the planner mostly steers from nearby
+    /// nodes), and aimed again once if it lands below [`STEER_SHORT`]` × L_max`, so the steps
+    /// stay as long as the bound allows: most steps then take one or two kinematics
+    /// evaluations instead of about three.
     fn steer(&self, tree: &Tree, near: u32, target: &[f64], work: &mut Work) -> Option<bool> {
         let from = tree.config(near);
         let dist = distance(from, target);
         if dist < 1e-9 {
             return None;
         }
-        let mut s: f64 = 1.0;
+        let aim = STEER_AIM * self.config.l_max;
+        let aimed = self.config.aimed_steering;
+        let mut s: f64 = if aimed && work.slope > 0.0 {
+            (aim / (work.slope * dist)).min(1.0)
+        } else {
+            1.0
+        };
+        let mut first = aimed;
         for _ in 0..30 {
             for ((q, a), b) in work.q_new.iter_mut().zip(from).zip(target) {
                 *q = a + s * (b - a);
@@ -354,11 +380,17 @@ impl<'a> Rrt<'a> {
                 &work.q_new,
                 self.config.lambda,
             );
+            work.slope = m / (s * dist);
+            if first && s < 1.0 && m < STEER_SHORT * self.config.l_max {
+                first = false;
+                s = (s * aim / m).min(1.0);
+                continue;
+            }
+            first = false;
             if m <= self.config.l_max {
                 return (s * dist > 1e-9).then_some(s == 1.0);
             }
-            // The metric grows about linearly with the step: aim just inside the bound.
-            s *= (0.95 * self.config.l_max / m).min(0.7);
+            s *= (aim / m).min(0.7);
         }
         None
     }
@@ -660,8 +692,10 @@ impl<'a> Rrt<'a> {
                 q_goal: vec![0.0; chain.dof()],
                 q_join: vec![0.0; chain.dof()],
                 ik: IkWork::new(chain),
+                slope: 0.0,
             },
         };
+        s.work.ik.hold_limits = self.config.ik_hold_limits;
         let home = chain.home().to_vec();
         if !self.checker.node_free(chain, &home, scratch) {
             return Growth {
