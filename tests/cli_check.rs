@@ -190,6 +190,10 @@ fn settings_sections() {
     assert_mentions(&m, &["planner.goal_bias = 1.5"]);
     let m = rejected(&format!("{VALID}\n[planner]\nchecker = \"magic\"\n"));
     assert_mentions(&m, &["planner.checker", "magic"]);
+    let m = rejected(&format!("{VALID}\n[planner]\nik_hold_limits = 3\n"));
+    assert_mentions(&m, &["planner.ik_hold_limits", "boolean", "line "]);
+    let m = rejected(&format!("{VALID}\n[planner]\naimed_steering = \"yes\"\n"));
+    assert_mentions(&m, &["planner.aimed_steering", "boolean"]);
     let m = rejected(&format!("{VALID}\n[objective]\nlambda3 = -1.0\n"));
     assert_mentions(&m, &["objective.lambda3 = -1"]);
     let m = rejected(&format!("{VALID}\n[optimizer]\npopulation = 1\n"));

@@ -94,14 +94,16 @@ pub fn dls(
         let Some(mut y) = solve(&work.jac) else {
             break;
         };
-        for (d, col) in work.step.iter_mut().zip(work.jac.chunks_exact(3)) {
-            *d = col[0] * y.x + col[1] * y.y + col[2] * y.z;
-        }
-        if work.hold_limits && hold_saturated(chain, &work.q, &work.step, &mut [&mut work.jac]) {
-            let Some(held) = solve(&work.jac) else {
-                break;
-            };
-            y = held;
+        if work.hold_limits {
+            for (d, col) in work.step.iter_mut().zip(work.jac.chunks_exact(3)) {
+                *d = col[0] * y.x + col[1] * y.y + col[2] * y.z;
+            }
+            if hold_saturated(chain, &work.q, &work.step, &mut [&mut work.jac]) {
+                let Some(held) = solve(&work.jac) else {
+                    break;
+                };
+                y = held;
+            }
         }
         let mut largest: f64 = 0.0;
         for col in work.jac.chunks_exact(3) {
@@ -136,9 +138,8 @@ pub const ORIENTATION_MARGIN: f64 = 0.5;
 /// `e = [p_target − p_tcp; w·e_R]`, `J = [J_p; w·J_ω]` (6 × dof), and each step is
 /// `Δa = Jᵀ(JJᵀ + μ²I₆)⁻¹ e`, scaled so no axis moves more than [`MAX_STEP`] and clamped into the
 /// ranges (with `work.hold_limits`, the axes at a limit that it pushes further out held still
-/// as in [`dls`]). For an
-/// approach cone the angular rows are projected normal to the tool's z axis, as
-/// rotation about it is free. Stops once the position is within `tolerance` and the orientation
+/// as in [`dls`]). For an approach cone the angular rows are projected normal to the tool's z
+/// axis, as rotation about it is free. Stops once the position is within `tolerance` and the orientation
 /// within [`ORIENTATION_MARGIN`] of its tolerance. A point task ([`TaskOrientation::Free`]) runs
 /// [`dls`] unchanged. Returns the remaining position distance and orientation error (radians);
 /// the configuration is left in `work.q`. Allocation-free.
@@ -196,22 +197,18 @@ pub fn dls_oriented(
         let Some(mut y) = solve(&work.jac, &work.ang) else {
             break;
         };
-        let columns = work.jac.chunks_exact(3).zip(work.ang.chunks_exact(3));
-        for (d, (lin, ang)) in work.step.iter_mut().zip(columns) {
-            *d = column(lin, ang).dot(&y);
-        }
-        if work.hold_limits
-            && hold_saturated(
-                chain,
-                &work.q,
-                &work.step,
-                &mut [&mut work.jac, &mut work.ang],
-            )
-        {
-            let Some(held) = solve(&work.jac, &work.ang) else {
-                break;
-            };
-            y = held;
+        if work.hold_limits {
+            let columns = work.jac.chunks_exact(3).zip(work.ang.chunks_exact(3));
+            for (d, (lin, ang)) in work.step.iter_mut().zip(columns) {
+                *d = column(lin, ang).dot(&y);
+            }
+            let held = &mut [&mut work.jac, &mut work.ang];
+            if hold_saturated(chain, &work.q, &work.step, held) {
+                let Some(held) = solve(&work.jac, &work.ang) else {
+                    break;
+                };
+                y = held;
+            }
         }
         let mut largest: f64 = 0.0;
         for (lin, ang) in work.jac.chunks_exact(3).zip(work.ang.chunks_exact(3)) {
