@@ -139,10 +139,10 @@ pub const ORIENTATION_MARGIN: f64 = 0.5;
 /// `Δa = Jᵀ(JJᵀ + μ²I₆)⁻¹ e`, scaled so no axis moves more than [`MAX_STEP`] and clamped into the
 /// ranges (with `work.hold_limits`, the axes at a limit that it pushes further out held still
 /// as in [`dls`]). For an approach cone the angular rows are projected normal to the tool's z
-/// axis, as rotation about it is free. Stops once the position is within `tolerance` and the orientation
-/// within [`ORIENTATION_MARGIN`] of its tolerance. A point task ([`TaskOrientation::Free`]) runs
-/// [`dls`] unchanged. Returns the remaining position distance and orientation error (radians);
-/// the configuration is left in `work.q`. Allocation-free.
+/// axis, as rotation about it is free. Stops once the position is within `tolerance` and the
+/// orientation within [`ORIENTATION_MARGIN`] of its tolerance. A point task
+/// ([`TaskOrientation::Free`]) runs [`dls`] unchanged. Returns the remaining position distance
+/// and orientation error (radians); the configuration is left in `work.q`. Allocation-free.
 #[allow(clippy::too_many_arguments)]
 pub fn dls_oriented(
     chain: &Chain,
@@ -202,8 +202,8 @@ pub fn dls_oriented(
             for (d, (lin, ang)) in work.step.iter_mut().zip(columns) {
                 *d = column(lin, ang).dot(&y);
             }
-            let held = &mut [&mut work.jac, &mut work.ang];
-            if hold_saturated(chain, &work.q, &work.step, held) {
+            let rows = &mut [&mut work.jac, &mut work.ang];
+            if hold_saturated(chain, &work.q, &work.step, rows) {
                 let Some(held) = solve(&work.jac, &work.ang) else {
                     break;
                 };
