@@ -110,6 +110,9 @@ pub struct CollisionScene {
     linear: bool,
     /// The bounding spheres of `bounds` in blocks, for the linear pass.
     blocks: Vec<Block>,
+    /// When every obstacle is a sphere and they are few: the spheres by coordinate, for
+    /// [`CollisionScene::sphere_nearest`].
+    spheres: Option<Spheres>,
     /// Distinct for every scene built ([`CollisionScene::id`]).
     id: u64,
 }
@@ -200,6 +203,143 @@ fn skipped(block: &Block, center: &Point3<f64>, best: f64, radius: f64) -> u32 {
     mask
 }
 
+/// Spheres per step of [`Spheres`]' vector pass.
+const WIDE: usize = 4;
+
+/// The obstacles of a scene of few spheres, centres and radii by coordinate (structure of
+/// arrays), padded to a multiple of [`WIDE`] with copies of the last sphere, so that
+/// [`CollisionScene::sphere_nearest`] measures a capsule against all of them at once.
+#[derive(Clone, Debug)]
+struct Spheres {
+    x: Vec<f64>,
+    y: Vec<f64>,
+    z: Vec<f64>,
+    r: Vec<f64>,
+}
+
+impl Spheres {
+    fn new(spheres: &[(Point3<f64>, f64)]) -> Self {
+        let padded = spheres.len().div_ceil(WIDE) * WIDE;
+        let at = |i: usize| spheres[i.min(spheres.len() - 1)];
+        Spheres {
+            x: (0..padded).map(|i| at(i).0.x).collect(),
+            y: (0..padded).map(|i| at(i).0.y).collect(),
+            z: (0..padded).map(|i| at(i).0.z).collect(),
+            r: (0..padded).map(|i| at(i).1).collect(),
+        }
+    }
+
+    /// The smallest `point_segment(c_k, a, b) − r_k − radius` over the spheres `k` and the
+    /// first `k` that gives it, one sphere at a time.
+    fn nearest_plain(&self, a: &Point3<f64>, b: &Point3<f64>, radius: f64) -> (f64, u32) {
+        let (mut best, mut nearest) = (f64::INFINITY, u32::MAX);
+        for k in 0..self.x.len() {
+            let c = Point3::new(self.x[k], self.y[k], self.z[k]);
+            let d = point_segment(&c, a, b) - self.r[k] - radius;
+            if d < best {
+                (best, nearest) = (d, k as u32);
+            }
+        }
+        (best, nearest)
+    }
+
+    /// As [`Spheres::nearest_plain`], [`WIDE`] spheres at a time on AVX vector lanes, with
+    /// the same operations in the same order (no fused multiply-add), so the same answer bit
+    /// for bit.
+    ///
+    /// # Safety
+    /// The processor must support AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn nearest_avx2(&self, a: &Point3<f64>, b: &Point3<f64>, radius: f64) -> (f64, u32) {
+        use std::arch::x86_64::*;
+        let ab = b - a;
+        let len2 = ab.norm_squared();
+        let (abx, aby, abz) = (
+            _mm256_set1_pd(ab.x),
+            _mm256_set1_pd(ab.y),
+            _mm256_set1_pd(ab.z),
+        );
+        let (ax, ay, az) = (
+            _mm256_set1_pd(a.x),
+            _mm256_set1_pd(a.y),
+            _mm256_set1_pd(a.z),
+        );
+        let (l2, zero, one) = (
+            _mm256_set1_pd(len2),
+            _mm256_setzero_pd(),
+            _mm256_set1_pd(1.0),
+        );
+        let rad = _mm256_set1_pd(radius);
+        let mut best = _mm256_set1_pd(f64::INFINITY);
+        let mut at = _mm256_set1_epi64x(-1);
+        let mut index = _mm256_set_epi64x(3, 2, 1, 0);
+        let step = _mm256_set1_epi64x(WIDE as i64);
+        let n = self.x.len();
+        let mut k = 0;
+        while k < n {
+            // SAFETY: k + WIDE ≤ n, the arrays' common length (a multiple of WIDE).
+            let (cx, cy, cz, r) = unsafe {
+                (
+                    _mm256_loadu_pd(self.x.as_ptr().add(k)),
+                    _mm256_loadu_pd(self.y.as_ptr().add(k)),
+                    _mm256_loadu_pd(self.z.as_ptr().add(k)),
+                    _mm256_loadu_pd(self.r.as_ptr().add(k)),
+                )
+            };
+            let (px, py, pz) = (
+                _mm256_sub_pd(cx, ax),
+                _mm256_sub_pd(cy, ay),
+                _mm256_sub_pd(cz, az),
+            );
+            let (qx, qy, qz) = if len2 > 0.0 {
+                let dot = _mm256_add_pd(
+                    _mm256_add_pd(_mm256_mul_pd(px, abx), _mm256_mul_pd(py, aby)),
+                    _mm256_mul_pd(pz, abz),
+                );
+                // clamp(0, 1): t < 0 gives 0, t > 1 gives 1 (no NaN: len2 > 0 and finite).
+                let t = _mm256_min_pd(_mm256_max_pd(_mm256_div_pd(dot, l2), zero), one);
+                (
+                    _mm256_sub_pd(px, _mm256_mul_pd(abx, t)),
+                    _mm256_sub_pd(py, _mm256_mul_pd(aby, t)),
+                    _mm256_sub_pd(pz, _mm256_mul_pd(abz, t)),
+                )
+            } else {
+                (px, py, pz)
+            };
+            let q2 = _mm256_add_pd(
+                _mm256_add_pd(_mm256_mul_pd(qx, qx), _mm256_mul_pd(qy, qy)),
+                _mm256_mul_pd(qz, qz),
+            );
+            let d = _mm256_sub_pd(_mm256_sub_pd(_mm256_sqrt_pd(q2), r), rad);
+            let less = _mm256_cmp_pd::<_CMP_LT_OQ>(d, best);
+            best = _mm256_blendv_pd(best, d, less);
+            at = _mm256_castpd_si256(_mm256_blendv_pd(
+                _mm256_castsi256_pd(at),
+                _mm256_castsi256_pd(index),
+                less,
+            ));
+            index = _mm256_add_epi64(index, step);
+            k += WIDE;
+        }
+        let mut values = [0.0; WIDE];
+        let mut indices = [0i64; WIDE];
+        // SAFETY: both arrays hold WIDE lanes.
+        unsafe {
+            _mm256_storeu_pd(values.as_mut_ptr(), best);
+            _mm256_storeu_si256(indices.as_mut_ptr().cast(), at);
+        }
+        // Each lane holds its first smallest; across lanes the smallest, then the first.
+        let (mut value, mut nearest) = (f64::INFINITY, u32::MAX);
+        for (v, i) in values.into_iter().zip(indices) {
+            if i >= 0 && (v < value || (v == value && (i as u32) < nearest)) {
+                (value, nearest) = (v, i as u32);
+            }
+        }
+        (value, nearest)
+    }
+}
+
 /// The point `p` (world coordinates) in the frame of `pose`.
 #[inline]
 fn local(pose: &Pose, p: &Point3<f64>) -> Point3<f64> {
@@ -261,10 +401,20 @@ impl CollisionScene {
                 .iter()
                 .all(|e| matches!(e, Exact::Sphere { .. } | Exact::Capsule { .. }));
         let blocks = if linear { blocks(&bounds) } else { Vec::new() };
+        let spheres = exact
+            .iter()
+            .map(|e| match e {
+                Exact::Sphere { center, radius } => Some((*center, *radius)),
+                _ => None,
+            })
+            .collect::<Option<Vec<_>>>()
+            .filter(|s| linear && !s.is_empty())
+            .map(|s| Spheres::new(&s));
         CollisionScene {
             obstacles,
             exact,
             blocks,
+            spheres,
             bounds,
             bvh,
             clearance: workspace.clearance,
@@ -276,6 +426,27 @@ impl CollisionScene {
     /// The clearance `ε`: a part at distance `≤ ε` from an obstacle collides.
     pub fn clearance(&self) -> f64 {
         self.clearance
+    }
+
+    /// For a scene of few obstacles that are all spheres: the distance from the capsule
+    /// (`a`–`b`, `radius`) to the nearest obstacle, exactly [`CollisionScene::distance`]'s
+    /// smallest value, and the first obstacle that gives it, measured against every sphere at
+    /// once (on AVX2 vector lanes where the processor has them, with the same answer bit for
+    /// bit). `None` for any other scene.
+    #[inline]
+    pub fn sphere_nearest(
+        &self,
+        a: &Point3<f64>,
+        b: &Point3<f64>,
+        radius: f64,
+    ) -> Option<(f64, u32)> {
+        let spheres = self.spheres.as_ref()?;
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor supports AVX2 (just checked).
+            return Some(unsafe { spheres.nearest_avx2(a, b, radius) });
+        }
+        Some(spheres.nearest_plain(a, b, radius))
     }
 
     /// The obstacles.
@@ -765,6 +936,73 @@ mod tests {
             }
         }
         assert!(checked > 5000, "{checked}");
+    }
+
+    /// The all-at-once pass over a scene of spheres gives, bit for bit, the smallest of the
+    /// one-by-one distances and the first obstacle that gives it, on the vector lanes and
+    /// without them; with zero-length segments, segments inside spheres, and every padding
+    /// of the last block. Scenes with any other obstacle do not take it.
+    #[test]
+    fn all_spheres_at_once_is_one_by_one() {
+        use crate::world::Obstacle;
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+        let mut cases = 0;
+        for n in [1usize, 2, 3, 4, 5, 7, 8, 9, 32, 47, 48] {
+            let obstacles: Vec<Obstacle> = (0..n)
+                .map(|k| {
+                    let c = Point3::from(nalgebra::Vector3::from_fn(|_, _| {
+                        rng.random_range(-1.0..1.0)
+                    }));
+                    Obstacle::sphere(format!("s{k}"), c, rng.random_range(0.01..0.4)).unwrap()
+                })
+                .collect();
+            let tasks = vec![Point3::new(5.0, 5.0, 5.0)];
+            let s = CollisionScene::new(&Workspace::new(obstacles, tasks, 0.01).unwrap());
+            let spheres = s.spheres.as_ref().expect("a scene of spheres");
+            for i in 0..3000 {
+                let a = Point3::from(nalgebra::Vector3::from_fn(|_, _| {
+                    rng.random_range(-1.2..1.2)
+                }));
+                let b = match i % 4 {
+                    0 => a,
+                    1 => a + nalgebra::Vector3::from_fn(|_, _| rng.random_range(-1e-9..1e-9)),
+                    _ => a + nalgebra::Vector3::from_fn(|_, _| rng.random_range(-0.8..0.8)),
+                };
+                let r = rng.random_range(0.0..0.3);
+                let want = (0..n).map(|k| (s.distance(k, &a, &b, r), k as u32)).fold(
+                    (f64::INFINITY, u32::MAX),
+                    |m, x| if x.0 < m.0 { x } else { m },
+                );
+                let got = s.sphere_nearest(&a, &b, r).unwrap();
+                assert_eq!(got.0.to_bits(), want.0.to_bits(), "{n} spheres");
+                assert_eq!(got.1, want.1, "{n} spheres");
+                assert_eq!(spheres.nearest_plain(&a, &b, r), want);
+                cases += usize::from(want.0 < 0.0);
+            }
+        }
+        assert!(cases > 100, "{cases} overlapping cases");
+        // A capsule among the spheres, or too many spheres: the other passes.
+        let mut obstacles = vec![Obstacle::sphere("s", Point3::origin(), 0.1).unwrap()];
+        let tasks = vec![Point3::new(5.0, 5.0, 5.0)];
+        let capsule = crate::world::ObstacleShape::Capsule {
+            length: 0.5,
+            radius: 0.1,
+        };
+        let placement = nalgebra::IsometryMatrix3::identity();
+        obstacles.push(Obstacle::new("c", capsule, placement).unwrap());
+        let s = CollisionScene::new(&Workspace::new(obstacles, tasks.clone(), 0.01).unwrap());
+        assert!(s
+            .sphere_nearest(&Point3::origin(), &Point3::origin(), 0.1)
+            .is_none());
+        let many = (0..=LINEAR_SCAN)
+            .map(|k| Obstacle::sphere(format!("s{k}"), Point3::new(k as f64, 0.0, 0.0), 0.1))
+            .collect::<Result<Vec<_>, _>>()
+            .unwrap();
+        let s = CollisionScene::new(&Workspace::new(many, tasks, 0.01).unwrap());
+        assert!(s
+            .sphere_nearest(&Point3::origin(), &Point3::origin(), 0.1)
+            .is_none());
     }
 
     /// The pipework scene takes the hull, decomposition and box fast paths.
