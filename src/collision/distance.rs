@@ -91,6 +91,93 @@ pub fn segment_segment_squared(
     (c1 - c2).norm_squared()
 }
 
+/// A pair of segments, each as its two end points.
+pub type SegmentPair<'a> = (&'a [Point3<f64>; 2], &'a [Point3<f64>; 2]);
+
+/// [`segment_segment_squared`] of four pairs of segments at once (`pairs[i]` = `([p1, q1],
+/// [p2, q2])`), on AVX2 vector lanes: every branch of the scalar version computed and the
+/// right one selected per lane, with the same operations in the same order (no fused
+/// multiply-add), so the same values bit for bit.
+///
+/// # Safety
+/// The processor must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+pub unsafe fn segment_segment_squared_x4(pairs: [SegmentPair<'_>; 4]) -> [f64; 4] {
+    use std::arch::x86_64::*;
+    const EPS: f64 = 1e-300;
+    // Lane i holds pair i.
+    macro_rules! lanes {
+        ($side:tt, $end:expr, $c:expr) => {
+            _mm256_set_pd(
+                pairs[3].$side[$end][$c],
+                pairs[2].$side[$end][$c],
+                pairs[1].$side[$end][$c],
+                pairs[0].$side[$end][$c],
+            )
+        };
+    }
+    let (p1x, p1y, p1z) = (lanes!(0, 0, 0), lanes!(0, 0, 1), lanes!(0, 0, 2));
+    let (q1x, q1y, q1z) = (lanes!(0, 1, 0), lanes!(0, 1, 1), lanes!(0, 1, 2));
+    let (p2x, p2y, p2z) = (lanes!(1, 0, 0), lanes!(1, 0, 1), lanes!(1, 0, 2));
+    let (q2x, q2y, q2z) = (lanes!(1, 1, 0), lanes!(1, 1, 1), lanes!(1, 1, 2));
+    let add = |x, y| _mm256_add_pd(x, y);
+    let sub = |x, y| _mm256_sub_pd(x, y);
+    let mul = |x, y| _mm256_mul_pd(x, y);
+    let div = |x, y| _mm256_div_pd(x, y);
+    let dot = |x: [__m256d; 3], y: [__m256d; 3]| {
+        add(add(mul(x[0], y[0]), mul(x[1], y[1])), mul(x[2], y[2]))
+    };
+    let (zero, one, eps) = (
+        _mm256_setzero_pd(),
+        _mm256_set1_pd(1.0),
+        _mm256_set1_pd(EPS),
+    );
+    let clamp = |x| _mm256_min_pd(_mm256_max_pd(x, zero), one);
+    let select = |mask, yes, no| _mm256_blendv_pd(no, yes, mask);
+    let d1 = [sub(q1x, p1x), sub(q1y, p1y), sub(q1z, p1z)];
+    let d2 = [sub(q2x, p2x), sub(q2y, p2y), sub(q2z, p2z)];
+    let r = [sub(p1x, p2x), sub(p1y, p2y), sub(p1z, p2z)];
+    let a = dot(d1, d1);
+    let e = dot(d2, d2);
+    let f = dot(d2, r);
+    let c = dot(d1, r);
+    let b = dot(d1, d2);
+    let a_small = _mm256_cmp_pd::<_CMP_LE_OQ>(a, eps);
+    let e_small = _mm256_cmp_pd::<_CMP_LE_OQ>(e, eps);
+    // Neither is short.
+    let denom = sub(mul(a, e), mul(b, b));
+    let s0 = select(
+        _mm256_cmp_pd::<_CMP_GT_OQ>(denom, zero),
+        clamp(div(sub(mul(b, f), mul(c, e)), denom)),
+        zero,
+    );
+    let t0 = div(add(mul(b, s0), f), e);
+    let below = _mm256_cmp_pd::<_CMP_LT_OQ>(t0, zero);
+    let above = _mm256_cmp_pd::<_CMP_GT_OQ>(t0, one);
+    let neg_c = _mm256_xor_pd(c, _mm256_set1_pd(-0.0));
+    let s_c = clamp(div(neg_c, a));
+    let s_general = select(below, s_c, select(above, clamp(div(sub(b, c), a)), s0));
+    let t_general = select(below, zero, select(above, one, t0));
+    // The first segment short: s = 0, t = clamp(f / e); the second short: t = 0, s = clamp(−c
+    // / a); both: s = t = 0 (the difference is then `r`, up to the sign of a zero).
+    let s = select(a_small, zero, select(e_small, s_c, s_general));
+    let t = select(
+        a_small,
+        select(e_small, zero, clamp(div(f, e))),
+        select(e_small, zero, t_general),
+    );
+    let w = [
+        sub(add(p1x, mul(d1[0], s)), add(p2x, mul(d2[0], t))),
+        sub(add(p1y, mul(d1[1], s)), add(p2y, mul(d2[1], t))),
+        sub(add(p1z, mul(d1[2], s)), add(p2z, mul(d2[2], t))),
+    ];
+    let mut out = [0.0; 4];
+    // SAFETY: `out` holds four lanes.
+    unsafe { _mm256_storeu_pd(out.as_mut_ptr(), dot(w, w)) };
+    out
+}
+
 /// Distance between two segments; see [`segment_segment_squared`].
 #[inline]
 pub fn segment_segment(
@@ -455,5 +542,61 @@ mod tests {
         let z = Point3::new(0.5, -1.0, 1.0);
         let z2 = Point3::new(0.5, 1.0, 1.0);
         assert!((segment_segment(&o, &x, &z, &z2) - 1.0).abs() < 1e-15);
+    }
+
+    /// Four pairs at once give [`segment_segment_squared`]'s values bit for bit: random
+    /// pairs, zero-length and nearly zero-length segments, parallel and crossing ones, shared
+    /// end points, in every lane.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn four_pairs_at_once_are_one_by_one() {
+        use rand::{RngExt, SeedableRng};
+        if !std::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
+        let point = |rng: &mut rand_chacha::ChaCha8Rng| {
+            Point3::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+            )
+        };
+        let mut segments = Vec::new();
+        for i in 0..4000 {
+            let p = point(&mut rng);
+            let q = match i % 6 {
+                0 => p,
+                1 => p + Vector3::new(1e-160, 0.0, 0.0),
+                _ => point(&mut rng),
+            };
+            segments.push([p, q]);
+        }
+        // Parallel, collinear and touching pairs.
+        for k in 0..500 {
+            let [p, q] = segments[k];
+            let shift = point(&mut rng).coords * 0.3;
+            segments.push([p + shift, q + shift]);
+            segments.push([q, p]);
+            segments.push([p, p + (q - p) * 2.0]);
+        }
+        let n = segments.len();
+        let mut cases = 0;
+        for _ in 0..20_000 {
+            let pick: [(usize, usize); 4] =
+                std::array::from_fn(|_| (rng.random_range(0..n), rng.random_range(0..n)));
+            let mut pairs = pick.map(|(i, j)| (&segments[i], &segments[j]));
+            if rng.random_range(0..8) == 0 {
+                pairs[1] = (pairs[1].0, pairs[1].0); // a segment with itself
+            }
+            // SAFETY: AVX2 is present (checked above).
+            let got = unsafe { segment_segment_squared_x4(pairs) };
+            for (g, (s1, s2)) in got.iter().zip(pairs) {
+                let want = segment_segment_squared(&s1[0], &s1[1], &s2[0], &s2[1]);
+                assert_eq!(g.to_bits(), want.to_bits(), "{s1:?} {s2:?}");
+                cases += 1;
+            }
+        }
+        assert_eq!(cases, 80_000);
     }
 }

@@ -93,6 +93,20 @@ pub struct RobotBody {
     fk_links: Vec<usize>,
     frames: Vec<String>,
     acm: AllowedCollisions,
+    /// How the self pairs are measured ([`RobotBody::measure_block`]), and each pair's block.
+    pair_blocks: Vec<PairBlock>,
+    block_of_pair: Vec<u32>,
+}
+
+/// A block of self pairs measured at once by [`RobotBody::measure_block`], as indices into
+/// [`RobotBody::self_pairs`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PairBlock {
+    /// Four pairs of two capsules, measured on vector lanes (a last block of fewer pairs is
+    /// filled up with copies of its last one).
+    Capsules([u32; 4]),
+    /// One pair with a solid.
+    Other(u32),
 }
 
 /// World placement of the solids at one configuration (reused buffer).
@@ -151,9 +165,55 @@ impl RobotBody {
             fk_links,
             frames,
             acm: AllowedCollisions::default(),
+            pair_blocks: Vec::new(),
+            block_of_pair: Vec::new(),
         };
         body.acm = AllowedCollisions::compute(chain, &body, self_collision);
+        body.index_pairs();
         body
+    }
+
+    /// Sorts the self pairs into blocks: four pairs of capsules, in their order, or one
+    /// other pair.
+    fn index_pairs(&mut self) {
+        let ns = self.radii.len();
+        let pairs = self.acm.pairs();
+        self.pair_blocks.clear();
+        self.block_of_pair = vec![0; pairs.len()];
+        let mut held: Vec<u32> = Vec::with_capacity(4);
+        let close = |held: &mut Vec<u32>, blocks: &mut Vec<PairBlock>, of: &mut [u32]| {
+            if let Some(&last) = held.last() {
+                for &i in held.iter() {
+                    of[i as usize] = blocks.len() as u32;
+                }
+                let at = |k: usize| held.get(k).copied().unwrap_or(last);
+                blocks.push(PairBlock::Capsules(std::array::from_fn(at)));
+                held.clear();
+            }
+        };
+        for (i, &(p, q)) in pairs.iter().enumerate() {
+            if (p as usize) < ns && (q as usize) < ns {
+                held.push(i as u32);
+                if held.len() == 4 {
+                    close(&mut held, &mut self.pair_blocks, &mut self.block_of_pair);
+                }
+            } else {
+                self.block_of_pair[i] = self.pair_blocks.len() as u32;
+                self.pair_blocks.push(PairBlock::Other(i as u32));
+            }
+        }
+        close(&mut held, &mut self.pair_blocks, &mut self.block_of_pair);
+    }
+
+    /// The blocks in which [`RobotBody::measure_block`] measures the self pairs.
+    pub fn pair_blocks(&self) -> &[PairBlock] {
+        &self.pair_blocks
+    }
+
+    /// The block of self pair `i` (an index into [`RobotBody::self_pairs`]).
+    #[inline]
+    pub fn block_of_pair(&self, i: usize) -> usize {
+        self.block_of_pair[i] as usize
     }
 
     /// The capsule body of `chain` with the default self-collision settings.
@@ -218,6 +278,7 @@ impl RobotBody {
         let mut acm = std::mem::take(&mut self.acm);
         acm.disable(self, extra);
         self.acm = acm;
+        self.index_pairs();
     }
 
     /// The self-collision pairs checked, as body indices `(p, q)` with `level(p) ≤ level(q)`.
@@ -428,6 +489,81 @@ impl RobotBody {
         }
     }
 
+    /// [`RobotBody::pair_distance`] of the self pairs of block `block`
+    /// ([`RobotBody::pair_blocks`]), written to `out` at their indices in
+    /// [`RobotBody::self_pairs`] (`out` holds one value per pair): four pairs of capsules at
+    /// once on AVX2 vector lanes where the processor has them, with the same values bit for
+    /// bit.
+    #[inline]
+    pub fn measure_block(&self, frames: &Frames, placed: &Placed, block: usize, out: &mut [f64]) {
+        let pairs = self.self_pairs();
+        match self.pair_blocks[block] {
+            PairBlock::Capsules(ids) => {
+                let four = ids.map(|i| pairs[i as usize]);
+                if let Some(d) = self.capsule_pair_distances(frames, four) {
+                    for (&i, d) in ids.iter().zip(d) {
+                        out[i as usize] = d;
+                    }
+                    return;
+                }
+                for &i in &ids {
+                    let (p, q) = pairs[i as usize];
+                    out[i as usize] = self.pair_distance(frames, placed, p as usize, q as usize);
+                }
+            }
+            PairBlock::Other(i) => {
+                let (p, q) = pairs[i as usize];
+                out[i as usize] = self.pair_distance(frames, placed, p as usize, q as usize);
+            }
+        }
+    }
+
+    /// [`RobotBody::pair_distance`] of four pairs of capsules `(p, q)` at once, on AVX2 vector
+    /// lanes, with the same values bit for bit; `None` when the processor lacks AVX2 or a body
+    /// is not a capsule.
+    #[inline]
+    pub fn capsule_pair_distances(
+        &self,
+        frames: &Frames,
+        pairs: [(u32, u32); 4],
+    ) -> Option<[f64; 4]> {
+        let ns = self.radii.len();
+        if pairs
+            .iter()
+            .any(|&(p, q)| p as usize >= ns || q as usize >= ns)
+        {
+            return None;
+        }
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx2") {
+            let segs = &frames.segments;
+            let pick = |k: usize| (&segs[pairs[k].0 as usize], &segs[pairs[k].1 as usize]);
+            // SAFETY: the processor supports AVX2 (just checked).
+            let d2 = unsafe {
+                super::super::distance::segment_segment_squared_x4([
+                    pick(0),
+                    pick(1),
+                    pick(2),
+                    pick(3),
+                ])
+            };
+            return Some(std::array::from_fn(|k| {
+                let (p, q) = pairs[k];
+                d2[k].sqrt() - self.radii[p as usize] - self.radii[q as usize]
+            }));
+        }
+        None
+    }
+
+    /// [`RobotBody::pair_distance`] of every checked self pair ([`RobotBody::self_pairs`]), in
+    /// their order, written to `out` (resized), block by block ([`RobotBody::measure_block`]).
+    pub fn pair_distances(&self, frames: &Frames, placed: &Placed, out: &mut Vec<f64>) {
+        out.resize(self.self_pairs().len(), 0.0);
+        for block in 0..self.pair_blocks.len() {
+            self.measure_block(frames, placed, block, out);
+        }
+    }
+
     /// Distance between the *cores* of two capsule segments (their segments, without radii);
     /// `None` when either body is a solid.
     pub fn core_distance(&self, frames: &Frames, p: usize, q: usize) -> Option<f64> {
@@ -481,5 +617,69 @@ impl RobotBody {
             let d = self.pair_distance(frames, placed, p as usize, q as usize);
             (d <= 0.0).then_some((p as usize, q as usize, d))
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+
+    /// Measured block by block, every self pair's distance is `pair_distance`'s bit for bit,
+    /// with capsules only and with solids among them (pairs measured one by one); every pair
+    /// lies in exactly the block `block_of_pair` names.
+    #[test]
+    fn pair_blocks_measure_every_pair_as_one_by_one() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("examples/scenarios/paper-3d.toml");
+        let s = crate::Scenario::load(&path).unwrap();
+        let chain = s.space.largest().chain();
+        let ball = SharedShape::ball(0.05);
+        let solid = |level| {
+            let local = IsometryMatrix3::translation(0.0, 0.02, 0.1);
+            Solid::new(level, local, ball.clone(), 1, "s".into())
+        };
+        let config = SelfCollisionConfig::default();
+        let bodies = [
+            RobotBody::new(&chain, Vec::new(), &config),
+            RobotBody::new(&chain, vec![solid(2), solid(5)], &config),
+        ];
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(2);
+        let mut frames = chain.frames();
+        let mut placed = Placed::default();
+        let mut a = vec![0.0; chain.dof()];
+        let (mut out, mut others) = (Vec::new(), 0);
+        for body in &bodies {
+            let pairs = body.self_pairs();
+            assert!(pairs.len() > 20);
+            let mut seen = vec![0; pairs.len()];
+            for (k, block) in body.pair_blocks().iter().enumerate() {
+                let ids: Vec<u32> = match *block {
+                    PairBlock::Capsules(ids) => ids.to_vec(),
+                    PairBlock::Other(i) => {
+                        others += 1;
+                        vec![i]
+                    }
+                };
+                let mut ids_once = ids.clone();
+                ids_once.dedup();
+                for i in ids_once {
+                    seen[i as usize] += 1;
+                    assert_eq!(body.block_of_pair(i as usize), k);
+                }
+            }
+            assert!(seen.iter().all(|&n| n == 1), "{seen:?}");
+            for _ in 0..200 {
+                chain.sample_config(&mut rng, &mut a);
+                chain.fk(&a, &mut frames);
+                body.place(&frames, &mut placed);
+                body.pair_distances(&frames, &placed, &mut out);
+                for (&d, &(p, q)) in out.iter().zip(pairs) {
+                    let want = body.pair_distance(&frames, &placed, p as usize, q as usize);
+                    assert_eq!(d.to_bits(), want.to_bits(), "pair ({p}, {q})");
+                }
+            }
+        }
+        assert!(others > 0);
     }
 }

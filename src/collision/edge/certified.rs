@@ -325,6 +325,7 @@ pub(crate) struct Work {
     twist_m: Vec<Twist>,
     items: Vec<Item>,
     mid: Vec<Mid>,
+
     stack: Vec<Interval>,
 }
 
@@ -465,6 +466,10 @@ pub(crate) struct Kept {
     /// Per body, the obstacle found nearest there (`u32::MAX` when none is known): the first
     /// one tried at a configuration close by.
     near: Vec<u32>,
+    /// The distance of every self pair measured there, per block of pairs
+    /// ([`RobotBody::measure_block`]) once `known` for that block.
+    pairs: Vec<f64>,
+    known: Vec<bool>,
 }
 
 /// Records in `clear` what is now known of body `b`'s clearance: an exact value replaces
@@ -490,6 +495,9 @@ impl Kept {
         self.clear.resize(n, (f64::NEG_INFINITY, false));
         self.near.clear();
         self.near.resize(n, u32::MAX);
+        self.pairs.resize(body.self_pairs().len(), f64::NAN);
+        self.known.clear();
+        self.known.resize(body.pair_blocks().len(), false);
     }
 
     fn new(chain: &Chain) -> Self {
@@ -501,6 +509,8 @@ impl Kept {
             balls: Vec::new(),
             clear: Vec::new(),
             near: Vec::new(),
+            pairs: Vec::new(),
+            known: Vec::new(),
         }
     }
 }
@@ -741,7 +751,7 @@ impl EdgeChecker for Certified {
         work.bounds_at.clear();
         work.bounds_at.resize(n, [f64::NAN; 3]);
         let mut bounds_level = usize::MAX;
-        for &(p, qb) in body.self_pairs() {
+        for (i, &(p, qb)) in body.self_pairs().iter().enumerate() {
             let (p, qb) = (p as usize, qb as usize);
             let level = body.level(p);
             if level != bounds_level {
@@ -775,14 +785,25 @@ impl EdgeChecker for Certified {
             if ball0 > bound || ball0 + ball1 > bound {
                 continue;
             }
-            let c0 = body.pair_distance(fa, pa, p, qb);
+            // The distances of the pair's block of self pairs, measured at once the first
+            // time a step needs one of them at a configuration (and kept with it).
+            let block = body.block_of_pair(i);
+            if !ka.known[block] {
+                body.measure_block(fa, pa, block, &mut ka.pairs);
+                ka.known[block] = true;
+            }
+            let c0 = ka.pairs[i];
             if c0 <= 0.0 {
                 return false;
             }
             if c0 > bound {
                 continue;
             }
-            let c1 = body.pair_distance(fb, pb, p, qb);
+            if !kb.known[block] {
+                body.measure_block(fb, pb, block, &mut kb.pairs);
+                kb.known[block] = true;
+            }
+            let c1 = kb.pairs[i];
             if c1 <= 0.0 {
                 return false;
             }
