@@ -83,8 +83,9 @@ struct Item {
     hint: u32,
     /// Bound on the (relative) speed of the item's moving body over the whole edge.
     reach: f64,
-    /// Bound on the rate of change of that speed over the whole edge.
+    /// Bound on the rate of change of that speed over the whole edge (`> 0`), and its inverse.
     accel: f64,
+    inv_accel: f64,
     c0: f64,
     c1: f64,
     /// The (relative) speed of the moving body at the interval's two ends.
@@ -104,17 +105,19 @@ struct Mid {
 }
 
 /// Bound on how far a body moves over an interval of length `s` whose end speeds are `u0` and
-/// `u1`, when its speed never exceeds `reach` and changes no faster than `accel`: the integral
-/// of `min(reach, u0 + accel·τ, u1 + accel·(s − τ))`, bounded above by the integral without
-/// `reach` and by `s·reach`.
+/// `u1`, when its speed never exceeds `reach` and changes no faster than `accel` (`> 0`, with
+/// `inv_accel = 1/accel`, which an item keeps so that no step divides): the integral of
+/// `min(reach, u0 + accel·τ, u1 + accel·(s − τ))`, bounded above by the integral without
+/// `reach` and by `s·reach`. The two ramps meet inside the interval when `|u1 − u0| < accel·s`,
+/// and then enclose `s·(u0 + u1)/2 + accel·s²/4 − (u1 − u0)²/(4·accel)`; otherwise the lower
+/// ramp alone counts, `s·min(u0, u1) + accel·s²/2`.
 #[inline]
-fn motion(s: f64, reach: f64, u0: f64, u1: f64, accel: f64) -> f64 {
-    let ramps = if accel > 0.0 {
-        let tau = (0.5 * ((u1 - u0) / accel + s)).clamp(0.0, s);
-        let rest = s - tau;
-        u0 * tau + 0.5 * accel * tau * tau + u1 * rest + 0.5 * accel * rest * rest
+fn motion(s: f64, reach: f64, u0: f64, u1: f64, accel: f64, inv_accel: f64) -> f64 {
+    let d = u1 - u0;
+    let ramps = if d.abs() < accel * s {
+        0.5 * s * (u0 + u1) + 0.25 * accel * s * s - 0.25 * d * d * inv_accel
     } else {
-        s * u0.min(u1)
+        s * u0.min(u1) + 0.5 * accel * s * s
     };
     (s * reach).min(ramps * (1.0 + 1e-12))
 }
@@ -677,7 +680,7 @@ impl EdgeChecker for Certified {
             let accel = work.accel(bounds, b, 0);
             let u0 = speed(body, fa, pa, b, &work.twist_a[level]);
             let u1 = speed(body, fb, pb, b, &work.twist_b[level]);
-            let bound = motion(1.0, plain, u0, u1, accel);
+            let bound = motion(1.0, plain, u0, u1, accel, 1.0 / accel);
             let (known0, exact0) = ka.clear[b];
             let (known1, exact1) = kb.clear[b];
             if known0 > bound {
@@ -740,6 +743,7 @@ impl EdgeChecker for Certified {
                 hint,
                 reach: plain,
                 accel,
+                inv_accel: 1.0 / accel,
                 c0,
                 c1,
                 u0,
@@ -779,7 +783,7 @@ impl EdgeChecker for Certified {
             if bound.is_nan() {
                 u0 = relative_speed(body, fa, pa, &work.twist_a, qb, level);
                 u1 = relative_speed(body, fb, pb, &work.twist_b, qb, level);
-                bound = motion(1.0, plain, u0, u1, accel);
+                bound = motion(1.0, plain, u0, u1, accel, 1.0 / accel);
                 work.bounds_at[qb] = [bound, u0, u1];
             }
             if ball0 > bound || ball0 + ball1 > bound {
@@ -816,6 +820,7 @@ impl EdgeChecker for Certified {
                 hint: u32::MAX,
                 reach: plain,
                 accel,
+                inv_accel: 1.0 / accel,
                 c0,
                 c1,
                 u0,
@@ -872,8 +877,8 @@ impl EdgeChecker for Certified {
                     (it.other as usize, work.twist_m[l1].minus(&work.twist_m[l0]))
                 };
                 let um = speed(body, fm, pm, q, &twist);
-                let left = motion(half, it.reach, it.u0, um, it.accel);
-                let right = motion(half, it.reach, um, it.u1, it.accel);
+                let left = motion(half, it.reach, it.u0, um, it.accel, it.inv_accel);
+                let right = motion(half, it.reach, um, it.u1, it.accel, it.inv_accel);
                 let (cm, hint) = if it.other != ENV {
                     let cm = body.pair_distance(fm, pm, b, it.other as usize);
                     (cm, u32::MAX)
@@ -1011,7 +1016,7 @@ mod tests {
                 let accel = work.accel(&bounds, qb, from);
                 let u0 = speed(&body, &f0, &p0, qb, &tw0[lq].minus(&tw0[from]));
                 let u1 = speed(&body, &f1, &p1, qb, &tw1[lq].minus(&tw1[from]));
-                let bound = motion(span, plain, u0, u1, accel);
+                let bound = motion(span, plain, u0, u1, accel, 1.0 / accel);
                 assert!(bound <= span * plain + 1e-12);
                 cases += 1;
                 if bound < 0.5 * span * plain {
@@ -1135,19 +1140,34 @@ mod tests {
     /// integral of the lower ramp where one end is much faster.
     #[test]
     fn motion_integral_cases() {
-        assert!((motion(2.0, 10.0, 1.0, 1.0, 0.0) - 2.0).abs() < 1e-9);
-        assert!((motion(1.0, 10.0, 0.5, 3.0, 0.0) - 0.5).abs() < 1e-9);
-        let (x, y) = (
-            motion(0.5, 10.0, 0.2, 0.7, 3.0),
-            motion(0.5, 10.0, 0.7, 0.2, 3.0),
-        );
+        let m = |s: f64, reach: f64, u0: f64, u1: f64, accel: f64| {
+            motion(s, reach, u0, u1, accel, 1.0 / accel)
+        };
+        assert!((m(2.0, 10.0, 1.0, 1.0, 1e-12) - 2.0).abs() < 1e-9);
+        assert!((m(1.0, 10.0, 0.5, 3.0, 1e-12) - 0.5).abs() < 1e-9);
+        let (x, y) = (m(0.5, 10.0, 0.2, 0.7, 3.0), m(0.5, 10.0, 0.7, 0.2, 3.0));
         assert!((x - y).abs() < 1e-12);
-        assert_eq!(motion(1.0, 0.1, 1.0, 1.0, 5.0), 0.1);
+        assert_eq!(m(1.0, 0.1, 1.0, 1.0, 5.0), 0.1);
         // u1 far above the ramp from u0: the integral of u0 + a·τ.
-        let m = motion(1.0, 100.0, 0.0, 50.0, 2.0);
-        assert!((m - 1.0).abs() < 1e-9, "{m}");
+        let v = m(1.0, 100.0, 0.0, 50.0, 2.0);
+        assert!((v - 1.0).abs() < 1e-9, "{v}");
         // Equal end speeds: the two ramps meet in the middle.
-        let m = motion(2.0, 100.0, 1.0, 1.0, 1.0);
-        assert!((m - (2.0 + 2.0 * 0.5 * 1.0)).abs() < 1e-9, "{m}");
+        let v = m(2.0, 100.0, 1.0, 1.0, 1.0);
+        assert!((v - (2.0 + 2.0 * 0.5 * 1.0)).abs() < 1e-9, "{v}");
+        // The closed form is the integral of the lower envelope, from where the ramps meet
+        // (and never below it): random cases against the integral summed on a fine grid.
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(8);
+        for _ in 0..2000 {
+            let s = rng.random_range(1e-6..1.0);
+            let (u0, u1) = (rng.random_range(0.0..3.0), rng.random_range(0.0..3.0));
+            let accel = 10f64.powf(rng.random_range(-6.0..2.0));
+            let got = m(s, f64::INFINITY, u0, u1, accel);
+            let tau = (0.5 * ((u1 - u0) / accel + s)).clamp(0.0, s);
+            let rest = s - tau;
+            let want = u0 * tau + 0.5 * accel * tau * tau + u1 * rest + 0.5 * accel * rest * rest;
+            assert!(got >= want, "{got} < {want}");
+            assert!(got <= want * (1.0 + 1e-9) + 1e-15, "{got} ≫ {want}");
+        }
     }
 }
