@@ -206,6 +206,11 @@ fn skipped(block: &Block, center: &Point3<f64>, best: f64, radius: f64) -> u32 {
 /// Spheres per step of [`Spheres`]' vector pass.
 const WIDE: usize = 4;
 
+/// Margin (in the scene's length unit) by which a block of spheres must lie beyond the cap
+/// for [`Spheres::nearest_avx2`] to skip it: far above the rounding of a distance in any scene
+/// of sane size (about 1e-16 of its extent), so skipping changes no answer.
+const SKIP_MARGIN: f64 = 1e-9;
+
 /// The obstacles of a scene of few spheres, centres and radii by coordinate (structure of
 /// arrays), padded to a multiple of [`WIDE`] with copies of the last sphere, so that
 /// [`CollisionScene::sphere_nearest`] measures a capsule against all of them at once.
@@ -230,8 +235,9 @@ impl Spheres {
     }
 
     /// The smallest `point_segment(c_k, a, b) − r_k − radius` over the spheres `k` and the
-    /// first `k` that gives it, one sphere at a time.
-    fn nearest_plain(&self, a: &Point3<f64>, b: &Point3<f64>, radius: f64) -> (f64, u32) {
+    /// first `k` that gives it, when it is below `cap`; otherwise `(cap, u32::MAX)`. One
+    /// sphere at a time.
+    fn nearest_plain(&self, a: &Point3<f64>, b: &Point3<f64>, radius: f64, cap: f64) -> (f64, u32) {
         let (mut best, mut nearest) = (f64::INFINITY, u32::MAX);
         for k in 0..self.x.len() {
             let c = Point3::new(self.x[k], self.y[k], self.z[k]);
@@ -240,18 +246,29 @@ impl Spheres {
                 (best, nearest) = (d, k as u32);
             }
         }
-        (best, nearest)
+        if best < cap {
+            (best, nearest)
+        } else {
+            (cap, u32::MAX)
+        }
     }
 
     /// As [`Spheres::nearest_plain`], [`WIDE`] spheres at a time on AVX vector lanes, with
     /// the same operations in the same order (no fused multiply-add), so the same answer bit
-    /// for bit.
+    /// for bit. A block of spheres that all lie beyond `cap` from the capsule's bounding ball
+    /// (by more than [`SKIP_MARGIN`], which no rounding of a distance reaches) is skipped.
     ///
     /// # Safety
     /// The processor must support AVX2.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn nearest_avx2(&self, a: &Point3<f64>, b: &Point3<f64>, radius: f64) -> (f64, u32) {
+    unsafe fn nearest_avx2(
+        &self,
+        a: &Point3<f64>,
+        b: &Point3<f64>,
+        radius: f64,
+        cap: f64,
+    ) -> (f64, u32) {
         use std::arch::x86_64::*;
         let ab = b - a;
         let len2 = ab.norm_squared();
@@ -271,6 +288,14 @@ impl Spheres {
             _mm256_set1_pd(1.0),
         );
         let rad = _mm256_set1_pd(radius);
+        let m = nalgebra::center(a, b);
+        let (mx, my, mz) = (
+            _mm256_set1_pd(m.x),
+            _mm256_set1_pd(m.y),
+            _mm256_set1_pd(m.z),
+        );
+        // A sphere lies beyond the cap when |c − m| ≥ cap + r + (half length + radius).
+        let reach = _mm256_set1_pd(cap + 0.5 * len2.sqrt() + radius + SKIP_MARGIN);
         let mut best = _mm256_set1_pd(f64::INFINITY);
         let mut at = _mm256_set1_epi64x(-1);
         let mut index = _mm256_set_epi64x(3, 2, 1, 0);
@@ -287,6 +312,25 @@ impl Spheres {
                     _mm256_loadu_pd(self.r.as_ptr().add(k)),
                 )
             };
+            let (ex, ey, ez) = (
+                _mm256_sub_pd(cx, mx),
+                _mm256_sub_pd(cy, my),
+                _mm256_sub_pd(cz, mz),
+            );
+            let e2 = _mm256_add_pd(
+                _mm256_add_pd(_mm256_mul_pd(ex, ex), _mm256_mul_pd(ey, ey)),
+                _mm256_mul_pd(ez, ez),
+            );
+            let lanes_reach = _mm256_add_pd(reach, r);
+            let beyond = _mm256_and_pd(
+                _mm256_cmp_pd::<_CMP_GT_OQ>(lanes_reach, zero),
+                _mm256_cmp_pd::<_CMP_GE_OQ>(e2, _mm256_mul_pd(lanes_reach, lanes_reach)),
+            );
+            if _mm256_movemask_pd(beyond) == (1 << WIDE) - 1 {
+                index = _mm256_add_epi64(index, step);
+                k += WIDE;
+                continue;
+            }
             let (px, py, pz) = (
                 _mm256_sub_pd(cx, ax),
                 _mm256_sub_pd(cy, ay),
@@ -336,7 +380,11 @@ impl Spheres {
                 (value, nearest) = (v, i as u32);
             }
         }
-        (value, nearest)
+        if value < cap {
+            (value, nearest)
+        } else {
+            (cap, u32::MAX)
+        }
     }
 }
 
@@ -430,23 +478,25 @@ impl CollisionScene {
 
     /// For a scene of few obstacles that are all spheres: the distance from the capsule
     /// (`a`–`b`, `radius`) to the nearest obstacle, exactly [`CollisionScene::distance`]'s
-    /// smallest value, and the first obstacle that gives it, measured against every sphere at
-    /// once (on AVX2 vector lanes where the processor has them, with the same answer bit for
-    /// bit). `None` for any other scene.
+    /// smallest value, and the first obstacle that gives it, when it is below `cap`; otherwise
+    /// `(cap, u32::MAX)`. Every sphere is measured at once (on AVX2 vector lanes where the
+    /// processor has them, with the same answer bit for bit), except blocks of spheres that
+    /// lie beyond the cap. `None` for any other scene.
     #[inline]
     pub fn sphere_nearest(
         &self,
         a: &Point3<f64>,
         b: &Point3<f64>,
         radius: f64,
+        cap: f64,
     ) -> Option<(f64, u32)> {
         let spheres = self.spheres.as_ref()?;
         #[cfg(target_arch = "x86_64")]
         if std::is_x86_feature_detected!("avx2") {
             // SAFETY: the processor supports AVX2 (just checked).
-            return Some(unsafe { spheres.nearest_avx2(a, b, radius) });
+            return Some(unsafe { spheres.nearest_avx2(a, b, radius, cap) });
         }
-        Some(spheres.nearest_plain(a, b, radius))
+        Some(spheres.nearest_plain(a, b, radius, cap))
     }
 
     /// The obstacles.
@@ -947,7 +997,7 @@ mod tests {
         use crate::world::Obstacle;
         use rand::{RngExt, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
-        let mut cases = 0;
+        let (mut cases, mut capped) = (0, 0);
         for n in [1usize, 2, 3, 4, 5, 7, 8, 9, 32, 47, 48] {
             let obstacles: Vec<Obstacle> = (0..n)
                 .map(|k| {
@@ -970,18 +1020,21 @@ mod tests {
                     _ => a + nalgebra::Vector3::from_fn(|_, _| rng.random_range(-0.8..0.8)),
                 };
                 let r = rng.random_range(0.0..0.3);
-                let want = (0..n).map(|k| (s.distance(k, &a, &b, r), k as u32)).fold(
-                    (f64::INFINITY, u32::MAX),
-                    |m, x| if x.0 < m.0 { x } else { m },
-                );
-                let got = s.sphere_nearest(&a, &b, r).unwrap();
+                let cap = [f64::INFINITY, rng.random_range(-0.3..1.5)][i % 2];
+                // The first nearest below the cap, else the cap.
+                let want = (0..n)
+                    .map(|k| (s.distance(k, &a, &b, r), k as u32))
+                    .fold((cap, u32::MAX), |m, x| if x.0 < m.0 { x } else { m });
+                let got = s.sphere_nearest(&a, &b, r, cap).unwrap();
                 assert_eq!(got.0.to_bits(), want.0.to_bits(), "{n} spheres");
                 assert_eq!(got.1, want.1, "{n} spheres");
-                assert_eq!(spheres.nearest_plain(&a, &b, r), want);
+                assert_eq!(spheres.nearest_plain(&a, &b, r, cap), want);
                 cases += usize::from(want.0 < 0.0);
+                capped += usize::from(want.1 == u32::MAX);
             }
         }
         assert!(cases > 100, "{cases} overlapping cases");
+        assert!(capped > 1000, "{capped} capped cases");
         // A capsule among the spheres, or too many spheres: the other passes.
         let mut obstacles = vec![Obstacle::sphere("s", Point3::origin(), 0.1).unwrap()];
         let tasks = vec![Point3::new(5.0, 5.0, 5.0)];
@@ -993,7 +1046,7 @@ mod tests {
         obstacles.push(Obstacle::new("c", capsule, placement).unwrap());
         let s = CollisionScene::new(&Workspace::new(obstacles, tasks.clone(), 0.01).unwrap());
         assert!(s
-            .sphere_nearest(&Point3::origin(), &Point3::origin(), 0.1)
+            .sphere_nearest(&Point3::origin(), &Point3::origin(), 0.1, 1.0)
             .is_none());
         let many = (0..=LINEAR_SCAN)
             .map(|k| Obstacle::sphere(format!("s{k}"), Point3::new(k as f64, 0.0, 0.0), 0.1))
@@ -1001,7 +1054,7 @@ mod tests {
             .unwrap();
         let s = CollisionScene::new(&Workspace::new(many, tasks, 0.01).unwrap());
         assert!(s
-            .sphere_nearest(&Point3::origin(), &Point3::origin(), 0.1)
+            .sphere_nearest(&Point3::origin(), &Point3::origin(), 0.1, 1.0)
             .is_none());
     }
 

@@ -387,9 +387,7 @@ impl RobotBody {
     }
 
     /// Clearance of body `b` (bounding ball `ball`) from the obstacles: `min(cap, min_k
-    /// distance(b, k) − ε)` or the exact `min_k distance(b, k) − ε` (a capsule in a scene of
-    /// few spheres, [`CollisionScene::sphere_nearest`]), exact when below `cap` and never
-    /// above the true clearance
+    /// distance(b, k) − ε)`, exact when below `cap` and never above the true clearance
     /// ([`CollisionScene::nearest`]), with the nearest obstacle when it is below `cap`
     /// (`u32::MAX` otherwise). `hint` (an obstacle index, or `u32::MAX`) is tried first: the
     /// obstacle nearest at a close-by configuration prunes the search best. `≤ 0` is a
@@ -409,12 +407,10 @@ impl RobotBody {
         let eps = scene.clearance();
         let ns = self.radii.len();
         if b < ns {
-            // A scene of few spheres: every one measured at once, the exact clearance.
+            // A scene of few spheres: every one measured at once, but those beyond the cap.
             let [p, q] = &frames.segments[b];
-            if let Some((d, k)) = scene.sphere_nearest(p, q, self.radii[b]) {
-                if k != u32::MAX {
-                    return (d - eps, k);
-                }
+            if let Some((d, k)) = scene.sphere_nearest(p, q, self.radii[b], cap + eps) {
+                return (d - eps, k);
             }
         }
         let mut cap = cap + eps;
