@@ -45,7 +45,11 @@
 //! The clearance from the environment is one best-first query of the scene's bounding-volume
 //! hierarchy ([`CollisionScene::nearest`]), capped at the value that would prove the interval
 //! (anything farther is as good), and started from the obstacle found nearest at the previous
-//! configuration: its cost follows the obstacles near the body, not their number.
+//! configuration: its cost follows the obstacles near the body, not their number. In a scene of
+//! a few spheres a capsule is measured against all of them at once instead, on vector lanes
+//! ([`CollisionScene::sphere_nearest`]), skipping only blocks of spheres beyond the cap. The
+//! distances of self pairs of two capsules are measured four pairs at a time, in fixed blocks
+//! ([`RobotBody::measure_block`]) kept with the configuration once a step needs one of them.
 //!
 //! Three things keep the work to what the proof needs. A body's clearance is queried at the
 //! step's end first (in a planner, the new configuration, where a collision is likeliest) and
