@@ -9,7 +9,7 @@ pub mod model;
 
 pub use acm::{AllowedCollisions, DisabledPair, Reason, SelfCollisionConfig};
 pub use bounds::MotionBounds;
-pub use model::{Placed, RobotBody, Solid};
+pub use model::{PairBlock, Placed, RobotBody, Solid};
 
 use super::scene::CollisionScene;
 use crate::kinematics::{Chain, Frames};
