@@ -941,6 +941,28 @@ mod tests {
         );
     }
 
+    /// A point with coordinates uniform in `[-half, half]`.
+    fn random_point(rng: &mut rand_chacha::ChaCha8Rng, half: f64) -> Point3<f64> {
+        use rand::RngExt;
+        Point3::from(nalgebra::Vector3::from_fn(|_, _| {
+            rng.random_range(-half..half)
+        }))
+    }
+
+    /// A scene of `n` random spheres (centres in the cube of half side 1, radii 0.01–0.4).
+    fn random_spheres(rng: &mut rand_chacha::ChaCha8Rng, n: usize) -> CollisionScene {
+        use rand::RngExt;
+        let obstacles = (0..n)
+            .map(|k| {
+                let c = random_point(rng, 1.0);
+                let r = rng.random_range(0.01..0.4);
+                crate::world::Obstacle::sphere(format!("s{k}"), c, r).unwrap()
+            })
+            .collect();
+        let tasks = vec![Point3::new(5.0, 5.0, 5.0)];
+        CollisionScene::new(&Workspace::new(obstacles, tasks, 0.01).unwrap())
+    }
+
     /// The blockwise linear pass gives what measuring every obstacle gives (the same distance,
     /// bit for bit, and the same nearest obstacle), for scenes whose last block is partly
     /// filled and scenes of fewer than two blocks (searched one by one), with and without an
@@ -948,26 +970,14 @@ mod tests {
     /// turns the reach negative).
     #[test]
     fn blockwise_linear_pass_is_the_plain_one() {
-        use crate::world::Obstacle;
         use rand::{RngExt, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
         let mut checked = 0;
         for n in [1usize, 3, 4, 5, 7, 8, 9, 10, 11, 13, 32, 47] {
-            let obstacles = (0..n)
-                .map(|k| {
-                    let c = Point3::from(nalgebra::Vector3::from_fn(|_, _| {
-                        rng.random_range(-1.0..1.0)
-                    }));
-                    Obstacle::sphere(format!("s{k}"), c, rng.random_range(0.01..0.4)).unwrap()
-                })
-                .collect();
-            let tasks = vec![Point3::new(5.0, 5.0, 5.0)];
-            let s = CollisionScene::new(&Workspace::new(obstacles, tasks, 0.01).unwrap());
+            let s = random_spheres(&mut rng, n);
             assert!(s.linear && s.blocks.len() == n.div_ceil(LANES));
             for _ in 0..2000 {
-                let a = Point3::from(nalgebra::Vector3::from_fn(|_, _| {
-                    rng.random_range(-1.2..1.2)
-                }));
+                let a = random_point(&mut rng, 1.2);
                 let b = a + nalgebra::Vector3::from_fn(|_, _| rng.random_range(-0.5..0.5));
                 let r = rng.random_range(0.0..0.3);
                 let center = nalgebra::center(&a, &b);
@@ -999,21 +1009,10 @@ mod tests {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
         let (mut cases, mut capped) = (0, 0);
         for n in [1usize, 2, 3, 4, 5, 7, 8, 9, 32, 47, 48] {
-            let obstacles: Vec<Obstacle> = (0..n)
-                .map(|k| {
-                    let c = Point3::from(nalgebra::Vector3::from_fn(|_, _| {
-                        rng.random_range(-1.0..1.0)
-                    }));
-                    Obstacle::sphere(format!("s{k}"), c, rng.random_range(0.01..0.4)).unwrap()
-                })
-                .collect();
-            let tasks = vec![Point3::new(5.0, 5.0, 5.0)];
-            let s = CollisionScene::new(&Workspace::new(obstacles, tasks, 0.01).unwrap());
+            let s = random_spheres(&mut rng, n);
             let spheres = s.spheres.as_ref().expect("a scene of spheres");
             for i in 0..3000 {
-                let a = Point3::from(nalgebra::Vector3::from_fn(|_, _| {
-                    rng.random_range(-1.2..1.2)
-                }));
+                let a = random_point(&mut rng, 1.2);
                 let b = match i % 4 {
                     0 => a,
                     1 => a + nalgebra::Vector3::from_fn(|_, _| rng.random_range(-1e-9..1e-9)),
