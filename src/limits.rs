@@ -248,7 +248,7 @@ pub mod exact {
         d.deserialize_seq(ArrayVisitor::<T, N>(PhantomData))
     }
 
-    /// [`array`] for an optional field (present means `Some`).
+    /// [`array()`] for an optional field (present means `Some`).
     pub fn option<'de, D, T, const N: usize>(d: D) -> Result<Option<[T; N]>, D::Error>
     where
         D: Deserializer<'de>,

@@ -207,8 +207,9 @@ fn skipped(block: &Block, center: &Point3<f64>, best: f64, radius: f64) -> u32 {
 const WIDE: usize = 4;
 
 /// Margin (in the scene's length unit) by which a block of spheres must lie beyond the cap
-/// for [`Spheres::nearest_avx2`] to skip it: far above the rounding of a distance in any scene
-/// of sane size (about 1e-16 of its extent), so skipping changes no answer.
+/// for [`Spheres::nearest_avx2`] to skip it: far above the rounding of a distance (about 1e-16
+/// of the scene's extent, which [`crate::limits::MAX_LENGTH`] keeps within 1e3), so skipping
+/// changes no answer.
 const SKIP_MARGIN: f64 = 1e-9;
 
 /// The obstacles of a scene of few spheres, centres and radii by coordinate (structure of

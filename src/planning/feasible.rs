@@ -21,7 +21,7 @@ const POSE_SAMPLES: usize = 720;
 ///   is `Rot(n, θ)·R_home` for some `θ` (rotations about `n` keep `n`, translations rotate
 ///   nothing). For an approach cone the tool's z axis then keeps its angle `β` to `n`, and a
 ///   cone of half-angle `tol` about `d` is met only if `|β − ∠(d, n)| ≤ tol`. For a pose, the
-///   error over `θ` is sampled at [`POSE_SAMPLES`] angles; it changes by at most `|Δθ|` between
+///   error over `θ` is sampled at `POSE_SAMPLES` angles; it changes by at most `|Δθ|` between
 ///   samples, so a sampled minimum above `tol + Δθ/2` proves it.
 pub fn impossible_orientation(chain: &Chain, orientation: &TaskOrientation) -> Option<String> {
     if orientation.is_free() {

@@ -16,7 +16,7 @@ pub struct IkWork {
     pub q: Vec<f64>,
     /// Per free axis, the change a step asks of it.
     step: Vec<f64>,
-    /// Hold axes at a limit that a step pushes further out ([`hold_saturated`]); else the
+    /// Hold axes at a limit that a step pushes further out (`hold_saturated`); else the
     /// whole step is clamped into the ranges. Default false
     /// ([`crate::planning::PlannerConfig::ik_hold_limits`]).
     pub hold_limits: bool,
@@ -63,7 +63,7 @@ fn hold_saturated(chain: &Chain, q: &[f64], step: &[f64], columns: &mut [&mut Ve
 /// effector on `target`: `Δa = Jᵀ(JJᵀ + μ²I)⁻¹ e`, `e = target − p_ee`, each step scaled so no
 /// axis moves more than [`MAX_STEP`], and the result clamped into the axis ranges; with
 /// `work.hold_limits`, an axis at a limit that the step would push further out is held still
-/// and the step solved again without it ([`hold_saturated`]). Stops early
+/// and the step solved again without it (`hold_saturated`). Stops early
 /// within `tolerance`. The configuration is left in `work.q`; returns the remaining distance.
 pub fn dls(
     chain: &Chain,
