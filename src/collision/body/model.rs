@@ -548,16 +548,9 @@ impl RobotBody {
                 d2[k].sqrt() - self.radii[p as usize] - self.radii[q as usize]
             }));
         }
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = frames;
         None
-    }
-
-    /// [`RobotBody::pair_distance`] of every checked self pair ([`RobotBody::self_pairs`]), in
-    /// their order, written to `out` (resized), block by block ([`RobotBody::measure_block`]).
-    pub fn pair_distances(&self, frames: &Frames, placed: &Placed, out: &mut Vec<f64>) {
-        out.resize(self.self_pairs().len(), 0.0);
-        for block in 0..self.pair_blocks.len() {
-            self.measure_block(frames, placed, block, out);
-        }
     }
 
     /// Distance between the *cores* of two capsule segments (their segments, without radii);
@@ -669,7 +662,11 @@ mod tests {
                 chain.sample_config(&mut rng, &mut a);
                 chain.fk(&a, &mut frames);
                 body.place(&frames, &mut placed);
-                body.pair_distances(&frames, &placed, &mut out);
+                out.clear();
+                out.resize(pairs.len(), f64::NAN);
+                for block in 0..body.pair_blocks().len() {
+                    body.measure_block(&frames, &placed, block, &mut out);
+                }
                 for (&d, &(p, q)) in out.iter().zip(pairs) {
                     let want = body.pair_distance(&frames, &placed, p as usize, q as usize);
                     assert_eq!(d.to_bits(), want.to_bits(), "pair ({p}, {q})");
