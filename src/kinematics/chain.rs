@@ -2,6 +2,7 @@
 
 use super::axis::{Axis, Range};
 use super::link::Link;
+use super::trig::sincos4;
 use nalgebra::{IsometryMatrix3, Matrix3, Point3, Rotation3, Vector3};
 use rand::RngExt;
 
@@ -28,8 +29,9 @@ impl FreeAxis {
 enum Op {
     /// Rotation about a local axis by a constant angle (sin, cos precomputed).
     RotConst { axis: Axis, s: f64, c: f64 },
-    /// Rotation about a local axis by the free variable `k`.
-    RotFree { axis: Axis, k: usize },
+    /// Rotation about a local axis by the free variable `k`, the chain's rotation number `r`
+    /// (rotations counted from the base, see `Chain::rotations`).
+    RotFree { axis: Axis, k: usize, r: usize },
     /// Translation along a local axis by a constant.
     TransConst { axis: Axis, v: f64 },
     /// Translation along a local axis by the free variable `k`; its rod runs from `lo` to `hi`
@@ -93,6 +95,9 @@ pub struct Chain {
     base: IsometryMatrix3<f64>,
     links: Vec<ChainLink>,
     ops: Vec<Op>,
+    /// The free axes that are rotations, from the base: forward kinematics takes their sines
+    /// and cosines four at a time in this order.
+    rotations: Vec<usize>,
     free: Vec<FreeAxis>,
     home: Vec<f64>,
     radius: f64,
@@ -232,6 +237,7 @@ impl Chain {
         colliders_per_link: usize,
     ) -> Self {
         let mut ops = Vec::new();
+        let mut rotations = Vec::new();
         let mut free = Vec::new();
         let mut home = Vec::new();
         let mut chain_links = Vec::with_capacity(links.len());
@@ -333,7 +339,12 @@ impl Chain {
                     format!("link{n}_{}", axis.name())
                 };
                 if axis.is_rotation() {
-                    ops.push(Op::RotFree { axis, k });
+                    ops.push(Op::RotFree {
+                        axis,
+                        k,
+                        r: rotations.len(),
+                    });
+                    rotations.push(k);
                     layout.axis.push(joint_arc + t_sum);
                 } else {
                     let (lo, hi) = Self::slider_rod(range);
@@ -386,6 +397,7 @@ impl Chain {
             base,
             links: chain_links,
             ops,
+            rotations,
             free,
             home,
             radius,
@@ -617,6 +629,9 @@ impl Chain {
         let mut pos: Vector3<f64> = self.base.translation.vector;
         out.frames[0] = self.base;
         let n = self.links.len();
+        // Sines and cosines of the rotation axes, four at a time in the order forward
+        // kinematics meets them: `trig[i]` belongs to the rotation numbered `4·⌊r/4⌋ + i`.
+        let mut trig = [(0.0, 1.0); 4];
         for (i, link) in self.links.iter().enumerate().take(links) {
             // Body polyline, in the frame F_{i-1}: it starts at F_{i-1}'s origin and ends at the
             // joint origin, so only its interior points need transforming.
@@ -643,8 +658,14 @@ impl Chain {
             for op in &self.ops[link.ops.clone()] {
                 match *op {
                     Op::RotConst { axis, s, c } => rotate_local(&mut rot, axis, s, c),
-                    Op::RotFree { axis, k } => {
-                        let (s, c) = libm::sincos(a[k]);
+                    Op::RotFree { axis, k, r } => {
+                        if r % 4 == 0 {
+                            let rotations = &self.rotations[r..];
+                            trig = sincos4(std::array::from_fn(|i| {
+                                rotations.get(i).map_or(0.0, |&j| a[j])
+                            }));
+                        }
+                        let (s, c) = trig[r % 4];
                         rotate_local(&mut rot, axis, s, c);
                         let f = &mut out.axis_frames[k];
                         f.translation.vector = pos;
@@ -705,7 +726,7 @@ impl Chain {
             let origin = frames.joints[i].coords;
             for op in &self.ops[link.ops.clone()] {
                 match *op {
-                    Op::RotFree { axis, k } => {
+                    Op::RotFree { axis, k, .. } => {
                         let w = frames.axis_frames[k].rotation.matrix().column(axis.index());
                         let col = w.cross(&(ee - origin));
                         out[3 * k..3 * k + 3].copy_from_slice(col.as_slice());
@@ -731,7 +752,7 @@ impl Chain {
         debug_assert_eq!(out.len(), 3 * self.free.len());
         for op in &self.ops {
             match *op {
-                Op::RotFree { axis, k } => {
+                Op::RotFree { axis, k, .. } => {
                     let w = frames.axis_frames[k].rotation.matrix().column(axis.index());
                     out[3 * k..3 * k + 3].copy_from_slice(w.as_slice());
                 }

@@ -5,6 +5,7 @@ pub mod axis;
 pub mod chain;
 pub mod link;
 pub mod placement;
+pub mod trig;
 
 pub use axis::{Axis, Range};
 pub use chain::{step_length, ArcLayout, Chain, Frames, FreeAxis};
