@@ -23,21 +23,37 @@ pub fn sincos4(x: [f64; 4]) -> [(f64, f64); 4] {
 
 // The constants of FreeBSD msun's `e_rem_pio2.c`, `k_sin.c` and `k_cos.c` (as in `libm`), by
 // their bits: 2/π, π/2 in two parts, and the polynomials' coefficients.
+#[cfg(target_arch = "x86_64")]
 const TO_INT: f64 = 1.5 / f64::EPSILON;
+#[cfg(target_arch = "x86_64")]
 const INV_PIO2: f64 = f64::from_bits(0x3fe4_5f30_6dc9_c883);
+#[cfg(target_arch = "x86_64")]
 const PIO2_1: f64 = f64::from_bits(0x3ff9_21fb_5440_0000);
+#[cfg(target_arch = "x86_64")]
 const PIO2_1T: f64 = f64::from_bits(0x3dd0_b461_1a62_6331);
+#[cfg(target_arch = "x86_64")]
 const S1: f64 = f64::from_bits(0xbfc5_5555_5555_5549);
+#[cfg(target_arch = "x86_64")]
 const S2: f64 = f64::from_bits(0x3f81_1111_1110_f8a6);
+#[cfg(target_arch = "x86_64")]
 const S3: f64 = f64::from_bits(0xbf2a_01a0_19c1_61d5);
+#[cfg(target_arch = "x86_64")]
 const S4: f64 = f64::from_bits(0x3ec7_1de3_57b1_fe7d);
+#[cfg(target_arch = "x86_64")]
 const S5: f64 = f64::from_bits(0xbe5a_e5e6_8a2b_9ceb);
+#[cfg(target_arch = "x86_64")]
 const S6: f64 = f64::from_bits(0x3de5_d93a_5acf_d57c);
+#[cfg(target_arch = "x86_64")]
 const C1: f64 = f64::from_bits(0x3fa5_5555_5555_554c);
+#[cfg(target_arch = "x86_64")]
 const C2: f64 = f64::from_bits(0xbf56_c16c_16c1_5177);
+#[cfg(target_arch = "x86_64")]
 const C3: f64 = f64::from_bits(0x3efa_01a0_19cb_1590);
+#[cfg(target_arch = "x86_64")]
 const C4: f64 = f64::from_bits(0xbe92_7e4f_809c_52ad);
+#[cfg(target_arch = "x86_64")]
 const C5: f64 = f64::from_bits(0x3e21_ee9e_bdb4_b1c4);
+#[cfg(target_arch = "x86_64")]
 const C6: f64 = f64::from_bits(0xbda8_fae9_be88_38d4);
 
 /// [`sincos4`] on AVX2 lanes.
