@@ -2,7 +2,7 @@
 
 use super::axis::{Axis, Range};
 use super::link::Link;
-use super::trig::sincos4;
+use super::trig::sincos_many;
 use nalgebra::{IsometryMatrix3, Matrix3, Point3, Rotation3, Vector3};
 use rand::RngExt;
 
@@ -98,6 +98,8 @@ pub struct Chain {
     /// The free axes that are rotations, from the base: forward kinematics takes their sines
     /// and cosines four at a time in this order.
     rotations: Vec<usize>,
+    /// `rotations_upto[l]`: how many of `rotations` belong to the first `l` links.
+    rotations_upto: Vec<usize>,
     free: Vec<FreeAxis>,
     home: Vec<f64>,
     radius: f64,
@@ -238,6 +240,7 @@ impl Chain {
     ) -> Self {
         let mut ops = Vec::new();
         let mut rotations = Vec::new();
+        let mut rotations_upto = vec![0];
         let mut free = Vec::new();
         let mut home = Vec::new();
         let mut chain_links = Vec::with_capacity(links.len());
@@ -392,12 +395,14 @@ impl Chain {
                 ops: start..ops.len(),
                 segments: seg_start..info.len(),
             });
+            rotations_upto.push(rotations.len());
         }
         Chain {
             base,
             links: chain_links,
             ops,
             rotations,
+            rotations_upto,
             free,
             home,
             radius,
@@ -629,9 +634,12 @@ impl Chain {
         let mut pos: Vector3<f64> = self.base.translation.vector;
         out.frames[0] = self.base;
         let n = self.links.len();
-        // Sines and cosines of the rotation axes, four at a time in the order forward
-        // kinematics meets them: `trig[i]` belongs to the rotation numbered `4·⌊r/4⌋ + i`.
-        let mut trig = [(0.0, 1.0); 4];
+        // Sines and cosines of the rotation axes of the evaluated links, up to `TRIG` at a
+        // time and all before they are needed (`trig[i]` belongs to rotation
+        // `TRIG·⌊r/TRIG⌋ + i`), so that their computations overlap.
+        const TRIG: usize = 32;
+        let mut trig = [(0.0, 1.0); TRIG];
+        let rotations = &self.rotations[..self.rotations_upto[links.min(n)]];
         for (i, link) in self.links.iter().enumerate().take(links) {
             // Body polyline, in the frame F_{i-1}: it starts at F_{i-1}'s origin and ends at the
             // joint origin, so only its interior points need transforming.
@@ -659,13 +667,15 @@ impl Chain {
                 match *op {
                     Op::RotConst { axis, s, c } => rotate_local(&mut rot, axis, s, c),
                     Op::RotFree { axis, k, r } => {
-                        if r % 4 == 0 {
-                            let rotations = &self.rotations[r..];
-                            trig = sincos4(std::array::from_fn(|i| {
-                                rotations.get(i).map_or(0.0, |&j| a[j])
-                            }));
+                        if r % TRIG == 0 {
+                            let block = &rotations[r..rotations.len().min(r + TRIG)];
+                            let mut x = [0.0; TRIG];
+                            for (xi, &j) in x.iter_mut().zip(block) {
+                                *xi = a[j];
+                            }
+                            sincos_many(&x, &mut trig[..block.len()]);
                         }
-                        let (s, c) = trig[r % 4];
+                        let (s, c) = trig[r % TRIG];
                         rotate_local(&mut rot, axis, s, c);
                         let f = &mut out.axis_frames[k];
                         f.translation.vector = pos;

@@ -8,7 +8,9 @@
 //! with the same operations in the same order (no fused multiply-add), and any lane that
 //! `libm` would treat otherwise (a tiny angle, one within rounding of a multiple of `π/2`
 //! that needs a second reduction step, a huge or non-finite one) is recomputed by `libm`
-//! itself. Elsewhere the four are `libm::sincos` one by one.
+//! itself. Elsewhere the four are `libm::sincos` one by one. [`sincos_many`] takes any number
+//! of angles that way in one call, which forward kinematics uses for all the rotation axes it
+//! is about to evaluate.
 
 /// `(sin x, cos x)` of each of the four angles, exactly as `libm::sincos` gives them.
 #[inline]
@@ -19,6 +21,39 @@ pub fn sincos4(x: [f64; 4]) -> [(f64, f64); 4] {
         return unsafe { sincos4_avx2(x) };
     }
     x.map(libm::sincos)
+}
+
+/// `out[i] = (sin x[i], cos x[i])` for every angle of `x` (as many as `out` holds, which must
+/// not exceed `x.len()`), exactly as `libm::sincos` gives them: [`sincos4`] block by block, in
+/// one call, so that the blocks (independent of each other) overlap in the processor.
+#[inline]
+pub fn sincos_many(x: &[f64], out: &mut [(f64, f64)]) {
+    let x = &x[..out.len()];
+    #[cfg(target_arch = "x86_64")]
+    if std::is_x86_feature_detected!("avx2") {
+        // SAFETY: the processor supports AVX2 (just checked).
+        unsafe { sincos_many_avx2(x, out) };
+        return;
+    }
+    for (o, &v) in out.iter_mut().zip(x) {
+        *o = libm::sincos(v);
+    }
+}
+
+/// [`sincos_many`] on AVX2 lanes.
+///
+/// # Safety
+/// The processor must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn sincos_many_avx2(x: &[f64], out: &mut [(f64, f64)]) {
+    for (xs, os) in x.chunks(4).zip(out.chunks_mut(4)) {
+        let mut four = [0.0; 4];
+        four[..xs.len()].copy_from_slice(xs);
+        // SAFETY: the processor supports AVX2 (the caller's contract).
+        let sc = unsafe { sincos4_avx2(four) };
+        os.copy_from_slice(&sc[..os.len()]);
+    }
 }
 
 // The constants of FreeBSD msun's `e_rem_pio2.c`, `k_sin.c` and `k_cos.c` (as in `libm`), by
@@ -74,6 +109,7 @@ const C6: f64 = f64::from_bits(0xbda8_fae9_be88_38d4);
 /// The processor must support AVX2.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
+#[inline]
 unsafe fn sincos4_avx2(x: [f64; 4]) -> [(f64, f64); 4] {
     use std::arch::x86_64::*;
     let add = |a, b| _mm256_add_pd(a, b);
@@ -192,6 +228,25 @@ unsafe fn sincos4_avx2(x: [f64; 4]) -> [(f64, f64); 4] {
 mod tests {
     use super::*;
     use rand::{RngExt, SeedableRng};
+
+    /// [`sincos_many`] is `libm::sincos` bit for bit at every length (blocks of four and a
+    /// partial last block) and writes exactly as many values as `out` holds.
+    #[test]
+    fn many_at_once_are_libm_bit_for_bit() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(12);
+        for len in 0..40 {
+            let x: Vec<f64> = (0..len + 3).map(|_| rng.random_range(-9.0..9.0)).collect();
+            let mut out = vec![(f64::NAN, f64::NAN); len + 1];
+            sincos_many(&x, &mut out[..len]);
+            for (xi, oi) in x.iter().zip(&out[..len]) {
+                same(*xi, *oi);
+            }
+            assert!(
+                out[len].0.is_nan() && out[len].1.is_nan(),
+                "wrote past {len}"
+            );
+        }
+    }
 
     fn same(x: f64, got: (f64, f64)) {
         let want = libm::sincos(x);

@@ -4,7 +4,7 @@
 //!
 //! The islands run in lockstep, a generation at a time, over a [`Comm`]: one process for all of
 //! them ([`SingleProcess`], `kinsynth optimize --islands N`), or one or more islands per MPI
-//! rank ([`mpi::MpiComm`], with the cargo feature `mpi`: `mpirun -np N kinsynth optimize
+//! rank (`mpi::MpiComm`, with the cargo feature `mpi`: `mpirun -np N kinsynth optimize
 //! --islands`). Migration and every decision are synchronous, so the result depends on the
 //! seed and `N` only, not on the number of ranks or threads: island `i` of `N` plans its
 //! `k`-th evaluation with the random stream `k·N + i` and draws its step `g` from the optimiser
