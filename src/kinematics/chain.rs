@@ -95,8 +95,8 @@ pub struct Chain {
     base: IsometryMatrix3<f64>,
     links: Vec<ChainLink>,
     ops: Vec<Op>,
-    /// The free axes that are rotations, from the base: forward kinematics takes their sines
-    /// and cosines four at a time in this order.
+    /// The free axes that are rotations, from the base: forward kinematics takes the sines and
+    /// cosines of those of the links it evaluates at once, in this order.
     rotations: Vec<usize>,
     /// `rotations_upto[l]`: how many of `rotations` belong to the first `l` links.
     rotations_upto: Vec<usize>,

@@ -2,30 +2,18 @@
 //!
 //! Forward kinematics takes the sine and cosine of every rotation axis; `libm::sincos` (the
 //! FreeBSD `msun` algorithm: argument reduction by `π/2`, then the `k_sin` / `k_cos`
-//! polynomials) makes the results the same on every platform. [`sincos4`] gives exactly the
-//! values of `libm::sincos`, bit for bit, for four angles at once: on AVX2 lanes (detected at
-//! run time) the small-argument path and the one-step reduction are computed for all four
-//! with the same operations in the same order (no fused multiply-add), and any lane that
-//! `libm` would treat otherwise (a tiny angle, one within rounding of a multiple of `π/2`
-//! that needs a second reduction step, a huge or non-finite one) is recomputed by `libm`
-//! itself. Elsewhere the four are `libm::sincos` one by one. [`sincos_many`] takes any number
-//! of angles that way in one call, which forward kinematics uses for all the rotation axes it
-//! is about to evaluate.
-
-/// `(sin x, cos x)` of each of the four angles, exactly as `libm::sincos` gives them.
-#[inline]
-pub fn sincos4(x: [f64; 4]) -> [(f64, f64); 4] {
-    #[cfg(target_arch = "x86_64")]
-    if std::is_x86_feature_detected!("avx2") {
-        // SAFETY: the processor supports AVX2 (just checked).
-        return unsafe { sincos4_avx2(x) };
-    }
-    x.map(libm::sincos)
-}
+//! polynomials) makes the results the same on every platform. [`sincos_many`] gives exactly
+//! the values of `libm::sincos`, bit for bit, for any number of angles in one call (forward
+//! kinematics passes all the rotation axes it is about to evaluate), four at a time: on AVX2
+//! lanes (detected at run time) the small-argument path and the one-step reduction are
+//! computed for all four with the same operations in the same order (no fused multiply-add),
+//! and any lane that `libm` would treat otherwise (a tiny angle, one within rounding of a
+//! multiple of `π/2` that needs a second reduction step, a huge or non-finite one) is
+//! recomputed by `libm` itself. Elsewhere the angles are `libm::sincos` one by one.
 
 /// `out[i] = (sin x[i], cos x[i])` for every angle of `x` (as many as `out` holds, which must
-/// not exceed `x.len()`), exactly as `libm::sincos` gives them: [`sincos4`] block by block, in
-/// one call, so that the blocks (independent of each other) overlap in the processor.
+/// not exceed `x.len()`), exactly as `libm::sincos` gives them, four at a time, in one call so
+/// that the blocks (independent of each other) overlap in the processor.
 #[inline]
 pub fn sincos_many(x: &[f64], out: &mut [(f64, f64)]) {
     let x = &x[..out.len()];
@@ -91,7 +79,7 @@ const C5: f64 = f64::from_bits(0x3e21_ee9e_bdb4_b1c4);
 #[cfg(target_arch = "x86_64")]
 const C6: f64 = f64::from_bits(0xbda8_fae9_be88_38d4);
 
-/// [`sincos4`] on AVX2 lanes.
+/// `libm::sincos` of four angles on AVX2 lanes.
 ///
 /// `libm::sincos(x)` with `ix` the high word of `|x|`: for `ix < 0x3e46a09e` it returns
 /// `(x, 1)`; up to `ix ≤ 0x3fe921fb` (`|x| ≲ π/4`) the polynomials of `x` itself
@@ -322,7 +310,8 @@ mod tests {
             for (j, v) in chunk.iter().enumerate() {
                 x[(j + i) % 4] = *v;
             }
-            let got = sincos4(x);
+            let mut got = [(0.0, 0.0); 4];
+            sincos_many(&x, &mut got);
             for (xi, gi) in x.iter().zip(got) {
                 same(*xi, gi);
             }
