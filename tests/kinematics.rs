@@ -267,6 +267,58 @@ fn fk_matches_independent_matrix_product_on_a_general_chain() {
     compare_at_random_configurations(&d, 1);
 }
 
+/// A chain of more rotation axes than forward kinematics takes sines and cosines for at once
+/// (14 links with all three rotations free: 42 rotations, so two blocks), over angles up to
+/// ±7 rad (every quadrant and its reduction): the frames are the independent product's, and
+/// evaluating only the first `l` links gives exactly (bit for bit) the full evaluation's first
+/// `l` frames, so each link takes the sines of its own angles whatever the links evaluated.
+#[test]
+fn fk_of_a_long_chain_matches_the_product_and_its_prefixes() {
+    let links = (0..14)
+        .map(|i| {
+            link(
+                0.1 * i as f64,
+                0.05,
+                0.1,
+                0.3,
+                &[
+                    (Axis::Rx, -7.0, 7.0),
+                    (Axis::Ry, -7.0, 7.0),
+                    (Axis::Rz, -7.0, 7.0),
+                    (Axis::Tx, 0.0, 0.1),
+                ],
+            )
+        })
+        .collect();
+    let d = design(links);
+    compare_at_random_configurations(&d, 4);
+    let chain = d.chain();
+    assert_eq!(
+        chain
+            .free_axes()
+            .iter()
+            .filter(|f| f.axis.is_rotation())
+            .count(),
+        42
+    );
+    let (mut full, mut part) = (chain.frames(), chain.frames());
+    let mut rng = ChaCha8Rng::seed_from_u64(6);
+    for _ in 0..200 {
+        let a: Vec<f64> = chain
+            .free_axes()
+            .iter()
+            .map(|f| rng.random_range(f.range.min..=f.range.max))
+            .collect();
+        chain.fk(&a, &mut full);
+        for l in 1..=chain.link_count() {
+            chain.fk_links(&a, &mut part, l);
+            for (ours, theirs) in part.frames[..=l].iter().zip(&full.frames[..=l]) {
+                assert_eq!(ours, theirs, "first {l} links");
+            }
+        }
+    }
+}
+
 #[test]
 fn fk_matches_independent_matrix_product_on_the_paper_chains() {
     for preset in [Preset::Paper2d, Preset::Paper3d] {
