@@ -14,6 +14,9 @@
 /// `out[i] = (sin x[i], cos x[i])` for every angle of `x` (as many as `out` holds, which must
 /// not exceed `x.len()`), exactly as `libm::sincos` gives them, four at a time, in one call so
 /// that the blocks (independent of each other) overlap in the processor.
+///
+/// # Panics
+/// When `out` is longer than `x`.
 #[inline]
 pub fn sincos_many(x: &[f64], out: &mut [(f64, f64)]) {
     let x = &x[..out.len()];
