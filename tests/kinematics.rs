@@ -303,12 +303,9 @@ fn fk_of_a_long_chain_matches_the_product_and_its_prefixes() {
     );
     let (mut full, mut part) = (chain.frames(), chain.frames());
     let mut rng = ChaCha8Rng::seed_from_u64(6);
+    let mut a = vec![0.0; chain.dof()];
     for _ in 0..200 {
-        let a: Vec<f64> = chain
-            .free_axes()
-            .iter()
-            .map(|f| rng.random_range(f.range.min..=f.range.max))
-            .collect();
+        chain.sample_config(&mut rng, &mut a);
         chain.fk(&a, &mut full);
         for l in 1..=chain.link_count() {
             chain.fk_links(&a, &mut part, l);
