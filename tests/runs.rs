@@ -468,8 +468,8 @@ fn best_json_replays_its_evaluation_and_records_the_recheck() {
 
 #[test]
 fn reach_reports_the_spread_of_r_over_seeds() {
-    // A design that reaches task 9 only at the edge of the goal tolerance: R = 1 for one seed
-    // of 0-9 only.
+    // A design that reaches task 9 only at the edge of the goal tolerance: R = 1 for four
+    // seeds of 0-9 only.
     let design = root().join("tests/fixtures/edge-of-tolerance.json");
     let dir = tempfile::tempdir().unwrap();
     let report = dir.path().join("spread.json");
@@ -484,7 +484,7 @@ fn reach_reports_the_spread_of_r_over_seeds() {
         .unwrap();
     ok(&o);
     assert!(
-        stdout(&o).contains("R over 10 seeds (0–9): min 0.900, mean 0.910, max 1.000"),
+        stdout(&o).contains("R over 10 seeds (0–9): min 0.900, mean 0.940, max 1.000"),
         "{}",
         stdout(&o)
     );
@@ -493,7 +493,7 @@ fn reach_reports_the_spread_of_r_over_seeds() {
     assert_eq!(spread["seeds"].as_array().unwrap().len(), 10);
     assert_eq!(spread["min"], 0.9);
     assert_eq!(spread["max"], 1.0);
-    assert!((spread["mean"].as_f64().unwrap() - 0.91).abs() < 1e-12);
+    assert!((spread["mean"].as_f64().unwrap() - 0.94).abs() < 1e-12);
     assert_eq!(v["seed"], 0, "the report is the first seed's");
     let o = Command::new(BIN)
         .arg("reach")
@@ -531,10 +531,10 @@ fn confirmation_runs_keep_a_lucky_planner_run_from_scoring_r_1() {
         kinsynth::Design::load(&root().join("tests/fixtures/edge-of-tolerance.json")).unwrap();
     let x = s.space.encode(&design);
     assert_eq!(s.space.decode(&x), design);
-    // Planner seed 5, stream 0 is the one run of seeds 0-9 that reaches every task.
-    let lucky = Objective::new(&s, s.planner.clone(), 5);
+    // Planner seed 3, stream 0 reaches every task; its first confirmation run does not.
+    let lucky = Objective::new(&s, s.planner.clone(), 3);
     assert_eq!(lucky.plan_once(&x, 0, 0.0).0.reachability, 1.0);
-    let e = Objective::new(&s, s.planner.clone(), 5)
+    let e = Objective::new(&s, s.planner.clone(), 3)
         .with_confirmation(2)
         .evaluate_confirmed(&x, 0, 0.0);
     assert_eq!(e.breakdown.reachability, 0.9);

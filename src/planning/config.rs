@@ -47,9 +47,9 @@ pub struct PlannerConfig {
     /// pushes further out, and solve the step again without it ([`crate::planning::ik::dls`]):
     /// the other axes make up for it within the step and the error falls quadratically.
     /// `false` clamps the whole step into the ranges, as the paper's planner does, which cuts
-    /// every step short once an axis saturates. Default false (it changes the plans, and so
-    /// the optimiser's results).
-    #[serde(skip_serializing_if = "is_false")]
+    /// every step short once an axis saturates. Default true (the paper's baseline, `optimize
+    /// --baseline` and `experiment`, plans with `false`). Always written out, so that a record
+    /// of the settings replays the same plans whatever the default.
     pub ik_hold_limits: bool,
     /// Aim each steering try by the metric's growth per unit of actuation-space distance seen
     /// in the try before (the first by the previous steering), re-aiming a first try that
@@ -186,7 +186,7 @@ impl Default for PlannerConfig {
             time_limit: None,
             ik_steps: 20,
             postures: 1,
-            ik_hold_limits: false,
+            ik_hold_limits: true,
             aimed_steering: false,
             budget_growth: 5,
             schedule: None,

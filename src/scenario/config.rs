@@ -89,7 +89,7 @@ pub struct OptimizerConfig {
     /// them (0: no re-check). Default 8.
     pub recheck_seeds: usize,
     /// Extra planner runs, on their own random streams, that confirm every `R = 1` an
-    /// evaluation claims during the run; the first that falls short sets `R`. Default 2.
+    /// evaluation claims during the run; the first that falls short sets `R`. Default 3.
     pub confirm_seeds: usize,
     /// Migration between islands (`kinsynth optimize --islands`): every `interval`
     /// generations each island sends its best `count` designs to the next. Default 10 and 2.
@@ -112,7 +112,7 @@ impl Default for OptimizerConfig {
             evaluations: None,
             checkpoint_interval: 10.0,
             recheck_seeds: 8,
-            confirm_seeds: 2,
+            confirm_seeds: 3,
             migration: Migration::default(),
             ga: GaParams::default(),
             pso: PsoParams::default(),
