@@ -13,8 +13,8 @@
 //! `reach` runs the reachability of the largest design with planner seeds 0–9 in turn, `REPS`
 //! runs (default 100) per checker at π/4, and prints the mean time per run; the scenario
 //! defaults to the bundled paper-3d. Set `CHECKER=segment` or `CHECKER=certified` to run only
-//! one, and `PLANNER_OPTIONS=on` to plan with `planner.ik_hold_limits` and
-//! `planner.aimed_steering`. Under `valgrind --tool=cachegrind`, the instruction count of a run
+//! one, `AIMED_STEERING=on` to plan with `planner.aimed_steering`, and `IK_CLAMP=on` to plan
+//! without `planner.ik_hold_limits` (the paper's clamped inverse-kinematics steps). Under `valgrind --tool=cachegrind`, the instruction count of a run
 //! with `REPS` minus that of a run with 0 (the set-up alone), divided by the number of edges or
 //! runs, is the instruction cost the README quotes.
 
@@ -46,7 +46,8 @@ fn main() {
             }
         }
     };
-    let options = std::env::var("PLANNER_OPTIONS").is_ok_and(|v| v == "on");
+    let aimed = std::env::var("AIMED_STEERING").is_ok_and(|v| v == "on");
+    let clamp = std::env::var("IK_CLAMP").is_ok_and(|v| v == "on");
     let load = |path: &str| Scenario::load(Path::new(path)).expect("scenario");
     match mode {
         "edges" => {
@@ -89,9 +90,11 @@ fn main() {
                 let mut config = s.planner.clone();
                 config.checker = kind;
                 config.l_max = std::f64::consts::FRAC_PI_4;
-                if options {
-                    config.ik_hold_limits = true;
+                if aimed {
                     config.aimed_steering = true;
+                }
+                if clamp {
+                    config.ik_hold_limits = false;
                 }
                 let start = Instant::now();
                 let mut reached = 0.0;

@@ -14,7 +14,7 @@
 //! cargo run --release --example reach_presets -- [--checker certified|segment|discrete|ccd]
 //!     [--design largest|middle|smallest|random] [--iterations N] [--postures N]
 //!     [--budget-growth N] [--presets A-B] [--seeds A-B] [--preset paper-2d|paper-3d]
-//!     [--repeat N] [--planner-options] [--verbose]
+//!     [--repeat N] [--aimed-steering] [--ik-clamp] [--verbose]
 //! ```
 //!
 //! `--design middle` decodes the middle of every variable's bounds, `smallest` their lower
@@ -22,8 +22,9 @@
 //! (as in an optimiser's first generation). `--iterations`, `--postures` and `--budget-growth`
 //! override `planner.max_iterations`, `planner.postures` and `planner.budget_growth`.
 //! `--repeat N` runs everything N times and reports the smallest time of each preset (the
-//! results are the same every time), which is steadier on a busy machine. `--planner-options`
-//! turns on `planner.ik_hold_limits` and `planner.aimed_steering`. `--verbose` adds a
+//! results are the same every time), which is steadier on a busy machine. `--aimed-steering`
+//! turns on `planner.aimed_steering`; `--ik-clamp` turns off `planner.ik_hold_limits` (the
+//! inverse kinematics then clamps its steps into the ranges, as the paper's planner does). `--verbose` adds a
 //! line per unreached task with the tree's closest approach.
 
 use kinsynth::collision::{CheckerKind, CollisionScene};
@@ -85,8 +86,10 @@ struct Settings {
     iterations: Option<usize>,
     postures: Option<usize>,
     budget_growth: Option<usize>,
-    /// `planner.ik_hold_limits` and `planner.aimed_steering` on.
-    options: bool,
+    /// `planner.aimed_steering` on.
+    aimed: bool,
+    /// `planner.ik_hold_limits` off.
+    clamp: bool,
 }
 
 /// What the planner seeds gave on one preset.
@@ -122,9 +125,11 @@ fn run_preset(
     if let Some(n) = settings.budget_growth {
         config.budget_growth = n;
     }
-    if settings.options {
-        config.ik_hold_limits = true;
+    if settings.aimed {
         config.aimed_steering = true;
+    }
+    if settings.clamp {
+        config.ik_hold_limits = false;
     }
     config.validate().expect("valid planner settings");
     let chains: Vec<_> = seeds
@@ -170,7 +175,8 @@ fn main() {
         iterations: None,
         postures: None,
         budget_growth: None,
-        options: false,
+        aimed: false,
+        clamp: false,
     };
     let mut which = "largest".to_string();
     let mut presets = 1..=10u64;
@@ -184,8 +190,12 @@ fn main() {
             verbose = true;
             continue;
         }
-        if flag == "--planner-options" {
-            settings.options = true;
+        if flag == "--aimed-steering" {
+            settings.aimed = true;
+            continue;
+        }
+        if flag == "--ik-clamp" {
+            settings.clamp = true;
             continue;
         }
         let value = args
