@@ -14,9 +14,10 @@
 //! runs (default 100) per checker at π/4, and prints the mean time per run; the scenario
 //! defaults to the bundled paper-3d. Set `CHECKER=segment` or `CHECKER=certified` to run only
 //! one, `AIMED_STEERING=on` to plan with `planner.aimed_steering`, and `IK_CLAMP=on` to plan
-//! without `planner.ik_hold_limits` (the paper's clamped inverse-kinematics steps). Under `valgrind --tool=cachegrind`, the instruction count of a run
-//! with `REPS` minus that of a run with 0 (the set-up alone), divided by the number of edges or
-//! runs, is the instruction cost the README quotes.
+//! without `planner.ik_hold_limits` (the paper's clamped inverse-kinematics steps). Under
+//! `valgrind --tool=cachegrind`, the instruction count of a run with `REPS` minus that of a run
+//! with 0 (the set-up alone), divided by the number of edges or runs, is the instruction cost
+//! the README quotes.
 
 use kinsynth::collision::oracle::sample_edges;
 use kinsynth::collision::{make_checker, BodyModel, CheckerKind, CollisionScene, Scratch};

@@ -24,8 +24,8 @@
 //! `--repeat N` runs everything N times and reports the smallest time of each preset (the
 //! results are the same every time), which is steadier on a busy machine. `--aimed-steering`
 //! turns on `planner.aimed_steering`; `--ik-clamp` turns off `planner.ik_hold_limits` (the
-//! inverse kinematics then clamps its steps into the ranges, as the paper's planner does). `--verbose` adds a
-//! line per unreached task with the tree's closest approach.
+//! inverse kinematics then clamps its steps into the ranges, as the paper's planner does).
+//! `--verbose` adds a line per unreached task with the tree's closest approach.
 
 use kinsynth::collision::{CheckerKind, CollisionScene};
 use kinsynth::planning::reachability;

@@ -219,6 +219,24 @@ mod tests {
         }
     }
 
+    /// The holding inverse kinematics is the default, and a record of settings that clamp
+    /// (a `best.json`'s `planner`) reads back as clamping: the key is always written.
+    #[test]
+    fn ik_hold_limits_defaults_on_and_a_written_false_reads_back_false() {
+        assert!(PlannerConfig::default().ik_hold_limits);
+        let clamp = PlannerConfig {
+            ik_hold_limits: false,
+            ..PlannerConfig::default()
+        };
+        let json = serde_json::to_string(&clamp).unwrap();
+        assert!(json.contains("\"ik_hold_limits\":false"), "{json}");
+        let back: PlannerConfig = serde_json::from_str(&json).unwrap();
+        assert_eq!(back, clamp);
+        let toml = toml::to_string(&clamp).unwrap();
+        let back: PlannerConfig = toml::from_str(&toml).unwrap();
+        assert!(!back.ik_hold_limits, "{toml}");
+    }
+
     #[test]
     fn a_planner_table_without_the_new_keys_takes_their_defaults() {
         let p: PlannerConfig = toml::from_str("max_iterations = 500").unwrap();
