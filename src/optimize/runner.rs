@@ -279,6 +279,16 @@ pub fn fingerprint(bytes: &[u8]) -> String {
     format!("fnv1a64:{h:016x}")
 }
 
+/// Marks a recorded planner table (a `best.json`'s `planner`, a checkpoint's) that has no
+/// `ik_hold_limits` as clamping: such records were written when the key was left out for its
+/// default of the time, false, so they replay and resume as they ran.
+fn clamping_unless_recorded(planner: &mut serde_json::Value) {
+    if let Some(map) = planner.as_object_mut() {
+        map.entry("ik_hold_limits")
+            .or_insert(serde_json::Value::Bool(false));
+    }
+}
+
 /// The random stream, planner seed and settings of the evaluation that produced a `best.json`:
 /// enough for `kinsynth reach` to replay it.
 #[derive(Clone, Debug, PartialEq)]
@@ -314,8 +324,10 @@ impl Replay {
             file: path.to_path_buf(),
             message: format!("{field}: {e}"),
         };
+        let mut planner = planner.clone();
+        clamping_unless_recorded(&mut planner);
         let planner: crate::planning::PlannerConfig =
-            serde_json::from_value(planner.clone()).map_err(|e| parse("planner", e))?;
+            serde_json::from_value(planner).map_err(|e| parse("planner", e))?;
         check_planner(&planner).map_err(|e| e.in_file(path))?;
         Ok(Some(Replay {
             seed: serde_json::from_value(seed.clone()).map_err(|e| parse("seed", e))?,
@@ -508,10 +520,15 @@ impl<'a> Runner<'a> {
                 source,
             },
         )?;
-        let c: Checkpoint = serde_json::from_str(&text).map_err(|e| Error::Parse {
+        let parse = |e: serde_json::Error| Error::Parse {
             file: path.clone(),
             message: e.to_string(),
-        })?;
+        };
+        let mut v: serde_json::Value = serde_json::from_str(&text).map_err(parse)?;
+        if let Some(planner) = v.get_mut("planner") {
+            clamping_unless_recorded(planner);
+        }
+        let c: Checkpoint = serde_json::from_value(v).map_err(parse)?;
         c.planner.validate().map_err(|e| e.in_file(&path))?;
         Ok(c)
     }
@@ -998,5 +1015,86 @@ pub fn rate(history: &[HistoryRow]) -> f64 {
     match history.last() {
         Some(r) if r.elapsed_s > 0.0 => r.evaluations as f64 / r.elapsed_s,
         _ => 0.0,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A `best.json` whose planner record has no `ik_hold_limits` (written when the key was
+    /// left out for its then default, false) replays with the clamping inverse kinematics; a
+    /// record that has the key keeps its value.
+    #[test]
+    fn a_replay_record_without_ik_hold_limits_plans_with_clamping() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("best.json");
+        let mut planner = serde_json::to_value(crate::planning::PlannerConfig::default()).unwrap();
+        planner.as_object_mut().unwrap().remove("ik_hold_limits");
+        let best = |planner: &serde_json::Value| {
+            serde_json::json!({ "seed": 3, "stream": 7, "planner": planner }).to_string()
+        };
+        std::fs::write(&path, best(&planner)).unwrap();
+        let r = Replay::from_best(&path).unwrap().unwrap();
+        assert_eq!((r.seed, r.stream), (3, 7));
+        assert!(!r.planner.ik_hold_limits);
+        planner["ik_hold_limits"] = serde_json::Value::Bool(true);
+        std::fs::write(&path, best(&planner)).unwrap();
+        assert!(
+            Replay::from_best(&path)
+                .unwrap()
+                .unwrap()
+                .planner
+                .ik_hold_limits
+        );
+    }
+
+    /// The same for a checkpoint: one without the key resumes with clamping.
+    #[test]
+    fn a_checkpoint_without_ik_hold_limits_resumes_with_clamping() {
+        let dir = tempfile::tempdir().unwrap();
+        let c = Checkpoint {
+            scenario: PathBuf::from("s.toml"),
+            planner: crate::planning::PlannerConfig::default(),
+            options: RunOptions {
+                algorithm: Algorithm::Ga,
+                seed: 1,
+                time_limit: None,
+                evaluations: Some(10),
+                patience: 30,
+                checkpoint_interval: 10.0,
+                recheck_seeds: 8,
+                confirm_seeds: 3,
+            },
+            generation: 0,
+            evaluations: 0,
+            elapsed_s: 0.0,
+            stale: 0,
+            history: Vec::new(),
+            state: serde_json::Value::Null,
+            scenario_hash: None,
+            scenario_shape: None,
+            islands: None,
+        };
+        let mut v = serde_json::to_value(&c).unwrap();
+        let path = dir.path().join(files::CHECKPOINT);
+        std::fs::write(&path, v.to_string()).unwrap();
+        assert!(
+            Runner::read_checkpoint(dir.path())
+                .unwrap()
+                .planner
+                .ik_hold_limits
+        );
+        v["planner"]
+            .as_object_mut()
+            .unwrap()
+            .remove("ik_hold_limits");
+        std::fs::write(&path, v.to_string()).unwrap();
+        assert!(
+            !Runner::read_checkpoint(dir.path())
+                .unwrap()
+                .planner
+                .ik_hold_limits
+        );
     }
 }
