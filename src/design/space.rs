@@ -233,6 +233,37 @@ impl DesignSpace {
         d
     }
 
+    /// The largest design with one link removed, for each link that the space can remove
+    /// (its free lengths `a` and `d` admit zero and at least one of them is free): the
+    /// largest design's neighbours one link shorter (paper Eq. 28), in link order.
+    pub fn largest_shortened(&self) -> Vec<Design> {
+        let x = self.encode(&self.largest());
+        let links = self.variables.iter().map(|v| v.link).max().unwrap_or(0);
+        (1..=links)
+            .filter_map(|link| {
+                let lengths: Vec<usize> = (0..self.variables.len())
+                    .filter(|&i| {
+                        let v = &self.variables[i];
+                        v.link == link && matches!(v.param, Param::A | Param::D)
+                    })
+                    .collect();
+                let removable = !lengths.is_empty()
+                    && lengths.iter().all(|&i| {
+                        let v = &self.variables[i];
+                        v.lower <= 0.0 && 0.0 <= v.upper
+                    })
+                    && lengths.iter().any(|&i| x[i] != 0.0);
+                removable.then(|| {
+                    let mut y = x.clone();
+                    for &i in &lengths {
+                        y[i] = 0.0;
+                    }
+                    self.decode(&y)
+                })
+            })
+            .collect()
+    }
+
     /// The largest design of the space, used to check the workspace: lengths and offsets at
     /// the bound of larger magnitude, every range at its widest (lower bound of its min, upper
     /// bound of its max), and the angles θ, α at the middle of their bounds.
@@ -364,6 +395,52 @@ mod tests {
         let d = space(1e-3).largest();
         assert_eq!(d.links[0].a, 0.5);
         assert_eq!(d.links[1].axes.get(Axis::Ry), Range::new(-3.0, 3.0));
+    }
+
+    #[test]
+    fn largest_shortened_drops_each_removable_link_once() {
+        let template = Design {
+            links: vec![LinkDesign::default(); 4],
+            ..space(0.0).template().clone()
+        };
+        let var = |link, param, lower, upper| Variable {
+            link,
+            param,
+            lower,
+            upper,
+        };
+        let s = DesignSpace::new(
+            template,
+            vec![
+                var(1, Param::A, 0.0, 0.5),
+                var(1, Param::D, -0.3, 0.1),
+                var(2, Param::A, 0.1, 0.4), // cannot be removed: a ≥ 0.1
+                var(3, Param::A, 0.0, 0.2),
+                var(3, Param::Max(Axis::Ry), 0.0, 3.0),
+                var(4, Param::Max(Axis::Ry), 0.0, 3.0), // no free length
+            ],
+            1e-3,
+        )
+        .unwrap();
+        let largest = s.largest();
+        let shortened = s.largest_shortened();
+        assert_eq!(shortened.len(), 2, "links 1 and 3 only");
+        assert_eq!(
+            (shortened[0].links[0].a, shortened[0].links[0].d),
+            (0.0, 0.0)
+        );
+        assert_eq!(shortened[1].links[2].a, 0.0);
+        for (d, removed) in shortened.iter().zip([0, 2]) {
+            for k in 0..4 {
+                if k != removed {
+                    assert_eq!(d.links[k], largest.links[k], "link {} kept as is", k + 1);
+                }
+            }
+            assert_eq!(
+                d.links[removed].axes, largest.links[removed].axes,
+                "joints kept"
+            );
+        }
     }
 
     #[test]

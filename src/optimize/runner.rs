@@ -362,6 +362,19 @@ fn make_optimizer(
     }
 }
 
+/// The designs a fresh run starts from, encoded: the largest design (it reaches most), then
+/// the largest design with one link removed, for each removable link
+/// ([`DesignSpace::largest_shortened`]). A GA or a swarm puts them all into its first
+/// generation, the rest being random; ASA starts from the first. When the largest arm is too
+/// long for the cell, its one-link-shorter neighbours often reach every task, and they are the
+/// first step of the topology synthesis the objective rewards (paper Eq. 28).
+pub(crate) fn initial_designs(space: &crate::design::DesignSpace) -> Vec<Vec<f64>> {
+    std::iter::once(space.largest())
+        .chain(space.largest_shortened())
+        .map(|d| space.encode(&d))
+        .collect()
+}
+
 /// Restores the optimiser of a checkpoint and checks its state against the design space's
 /// dimension `dim`. Errors name the state's field.
 fn load_optimizer(
@@ -707,10 +720,9 @@ impl<'a> Runner<'a> {
         })
     }
 
-    /// A fresh optimiser of the run's algorithm; the largest design starts in its first
-    /// generation (it reaches most).
+    /// A fresh optimiser of the run's algorithm, started from [`initial_designs`].
     pub(crate) fn new_optimizer(&self) -> Box<dyn Optimizer> {
-        let seeds = vec![self.scenario.space.encode(&self.scenario.space.largest())];
+        let seeds = initial_designs(&self.scenario.space);
         make_optimizer(self.scenario, self.options.algorithm, seeds)
     }
 
@@ -1021,6 +1033,32 @@ pub fn rate(history: &[HistoryRow]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// On the bundled paper-2d scenario (8 links, lengths free from 0), a run starts from the
+    /// largest design and the eight designs that drop one of its links.
+    #[test]
+    fn a_run_starts_from_the_largest_design_and_its_one_link_shorter_neighbours() {
+        let s = Scenario::load(
+            &Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scenarios/paper-2d.toml"),
+        )
+        .unwrap();
+        let xs = initial_designs(&s.space);
+        assert_eq!(xs.len(), 9);
+        let largest = s.space.largest();
+        assert_eq!(xs[0], s.space.encode(&largest));
+        for (k, x) in xs[1..].iter().enumerate() {
+            let d = s.space.decode(x);
+            assert_eq!(d.links.len(), largest.links.len());
+            for (j, (l, big)) in d.links.iter().zip(&largest.links).enumerate() {
+                if j == k {
+                    assert_eq!(l.a, 0.0, "link {} removed", j + 1);
+                    assert_eq!(l.axes, big.axes, "its joint kept");
+                } else {
+                    assert_eq!(l, big, "link {} as in the largest design", j + 1);
+                }
+            }
+        }
+    }
 
     /// A `best.json` whose planner record has no `ik_hold_limits` (written when the key was
     /// left out for its then default, false) replays with the clamping inverse kinematics; a
