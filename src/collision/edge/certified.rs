@@ -49,7 +49,8 @@
 //! a few spheres a capsule is measured against all of them at once instead, on vector lanes
 //! ([`CollisionScene::sphere_nearest`]), skipping only blocks of spheres beyond the cap. The
 //! distances of self pairs of two capsules are measured four pairs at a time, in fixed blocks
-//! ([`RobotBody::measure_block`]) kept with the configuration once a step needs one of them.
+//! ([`RobotBody::measure_block`]) kept with the configuration once a step needs one of them;
+//! at a bisection point, the interval's unproven pairs are measured four at a time as well.
 //!
 //! Three things keep the work to what the proof needs. A body's clearance is queried at the
 //! step's end first (in a planner, the new configuration, where a collision is likeliest) and
@@ -152,6 +153,54 @@ fn push_children(items: &mut Vec<Item>, parent: std::ops::Range<usize>, mid: &[M
                 ..child
             });
         }
+    }
+}
+
+/// Writes to `out`, per item of `items`, the distance of its self pair at the configuration of
+/// `frames` (NaN for an item against the environment): pairs of capsules four at a time on
+/// vector lanes ([`RobotBody::capsule_pair_distances`], the same values as one by one).
+fn pair_distances(
+    body: &RobotBody,
+    frames: &Frames,
+    placed: &Placed,
+    items: &[Item],
+    out: &mut Vec<f64>,
+) {
+    out.clear();
+    out.resize(items.len(), f64::NAN);
+    let mut batch = [(0u32, 0u32); 4];
+    let mut at = [0usize; 4];
+    let mut n = 0;
+    let flush = |batch: &mut [(u32, u32); 4], at: &[usize; 4], n: usize, out: &mut [f64]| {
+        if n > 1 {
+            for k in n..4 {
+                batch[k] = batch[0];
+            }
+            if let Some(d) = body.capsule_pair_distances(frames, *batch) {
+                for (&i, d) in at[..n].iter().zip(d) {
+                    out[i] = d;
+                }
+                return;
+            }
+        }
+        for (&i, &(p, q)) in at[..n].iter().zip(batch.iter()) {
+            out[i] = body.pair_distance(frames, placed, p as usize, q as usize);
+        }
+    };
+    for (i, it) in items.iter().enumerate() {
+        if it.other == ENV {
+            continue;
+        }
+        batch[n] = (it.body, it.other);
+        at[n] = i;
+        n += 1;
+        if n == 4 {
+            flush(&mut batch, &at, n, out);
+            n = 0;
+        }
+    }
+    if n > 0 {
+        flush(&mut batch, &at, n, out);
     }
 }
 
@@ -332,6 +381,9 @@ pub(crate) struct Work {
     twist_m: Vec<Twist>,
     items: Vec<Item>,
     mid: Vec<Mid>,
+    /// The distances of an interval's self pairs at its bisection point, per item (NaN for
+    /// the items against the environment).
+    pd: Vec<f64>,
 
     stack: Vec<Interval>,
 }
@@ -776,12 +828,6 @@ impl EdgeChecker for Certified {
             if (cp - cq).norm_squared() > gap * gap {
                 continue;
             }
-            let ball0 = (cp - cq).norm() - rp - rq;
-            let ((cp, rp), (cq, rq)) = (kb.balls[p], kb.balls[qb]);
-            let ball1 = (cp - cq).norm() - rp - rq;
-            if ball0 + ball1 > plain {
-                continue;
-            }
             let accel = work.accel(bounds, qb, level);
             let [mut bound, mut u0, mut u1] = work.bounds_at[qb];
             if bound.is_nan() {
@@ -790,7 +836,13 @@ impl EdgeChecker for Certified {
                 bound = motion(1.0, plain, u0, u1, accel, 1.0 / accel);
                 work.bounds_at[qb] = [bound, u0, u1];
             }
-            if ball0 > bound || ball0 + ball1 > bound {
+            let ball0 = (cp - cq).norm() - rp - rq;
+            if ball0 > bound {
+                continue;
+            }
+            let ((cp, rp), (cq, rq)) = (kb.balls[p], kb.balls[qb]);
+            let ball1 = (cp - cq).norm() - rp - rq;
+            if ball0 + ball1 > bound {
                 continue;
             }
             // The distances of the pair's block of self pairs, measured at once the first
@@ -871,6 +923,13 @@ impl EdgeChecker for Certified {
             // Children: left [t0, tm] then right [tm, t1], appended after the parent's items.
             // Per item: the clearance and speed at tm, and the children's motion bounds.
             work.mid.clear();
+            pair_distances(
+                body,
+                fm,
+                pm,
+                &work.items[iv.start..iv.start + iv.len],
+                &mut work.pd,
+            );
             for i in iv.start..iv.start + iv.len {
                 let it = work.items[i];
                 let b = it.body as usize;
@@ -884,8 +943,7 @@ impl EdgeChecker for Certified {
                 let left = motion(half, it.reach, it.u0, um, it.accel, it.inv_accel);
                 let right = motion(half, it.reach, um, it.u1, it.accel, it.inv_accel);
                 let (cm, hint) = if it.other != ENV {
-                    let cm = body.pair_distance(fm, pm, b, it.other as usize);
-                    (cm, u32::MAX)
+                    (work.pd[i - iv.start], u32::MAX)
                 } else {
                     // Both children are proven once cm exceeds `need`; below it the
                     // clearance is exact (the decision is the same as with no cap).
