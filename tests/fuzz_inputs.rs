@@ -11,6 +11,7 @@
 
 use kinsynth::collision::CollisionScene;
 use kinsynth::optimize::runner::Runner;
+use kinsynth::planning::reach::reachability_of;
 use kinsynth::planning::{reachability, PlannerConfig};
 use kinsynth::world::mesh::load_mesh;
 use kinsynth::{Design, Scenario};
@@ -488,30 +489,37 @@ fn mutated_designs() {
     }
 }
 
-#[test]
-fn mutated_urdf() {
-    let dir = tempfile::tempdir().unwrap();
+/// Mutants of the bundled robot `robots/NAME`, written beside a `meshes` link (so that its
+/// relative and `package://` mesh paths resolve), imported with their bodies as `reach --urdf`
+/// does, and planned with in the UR5 cell.
+fn fuzz_urdf(name: &str, cases: usize, seed: u64) {
+    let (dir, _) = layout();
+    let robots = dir.path().join("examples/robots");
+    std::fs::create_dir_all(&robots).unwrap();
     let cell = repo("examples/scenarios/ur5-cell.toml");
     let s = Arc::new(Scenario::load(&cell).unwrap());
     let scene = Arc::new(CollisionScene::new(&s.workspace));
-    let original = std::fs::read(repo("examples/robots/ur5.urdf")).unwrap();
-    let mut m = Mutator::new(6);
-    for case in 0..400 {
+    let original = std::fs::read(repo(&format!("examples/robots/{name}"))).unwrap();
+    let mut m = Mutator::new(seed);
+    for case in 0..cases {
         let (bytes, what) = m.mutate(&original, true, false);
-        let path = dir.path().join(format!("case{case}.urdf"));
+        let what = format!("{name}: {what}");
+        let path = robots.join(format!("case{case}.urdf"));
         std::fs::write(&path, &bytes).unwrap();
         let (p, s, scene) = (path.clone(), s.clone(), scene.clone());
         let result = run_case("urdf", case, &what, &bytes, move || {
-            kinsynth::import::load_chain(&p, None, None, None, 4).map(|u| {
-                let r = reachability(
-                    &u.chain,
+            let options = kinsynth::import::ImportOptions::default();
+            kinsynth::import::load_robot(&p, None, None, None, 4, &options).map(|r| {
+                let report = reachability_of(
+                    &r.urdf.chain,
+                    Arc::new(r.body),
                     &scene,
                     &s.workspace.tasks,
                     &quick_planner(&s.planner),
                     1,
                     0,
                 );
-                assert!((0.0..=1.0).contains(&r.reachability));
+                assert!((0.0..=1.0).contains(&report.reachability));
             })
         });
         if let Err(e) = result {
@@ -531,6 +539,19 @@ fn mutated_urdf() {
             );
         }
     }
+}
+
+#[test]
+fn mutated_urdf() {
+    fuzz_urdf("ur5.urdf", 400, 6);
+}
+
+/// The URDF robot whose bodies are meshes (STL and COLLADA, by relative and `package://`
+/// paths).
+#[cfg(unix)]
+#[test]
+fn mutated_mesh_urdf() {
+    fuzz_urdf("mesh_arm.urdf", 120, 8);
 }
 
 /// A finished short run of paper-2d: its directory holds `checkpoint.json` and `best.json`.
@@ -609,4 +630,80 @@ fn regression_urdf_vector_split_by_a_line_break_gives_one_line() {
         .to_string();
     assert_one_line("urdf", 0, "regression", &e, &p);
     assert!(e.contains("expected 3 found 4"), "{e}");
+}
+
+/// A URDF robot whose link `link3_dh` has the collision cylinder `line` (the bundled UR5, with
+/// that element's line replaced), written beside nothing else.
+fn ur5_with(line: usize, from: &str, to: &str) -> (tempfile::TempDir, PathBuf) {
+    let text = std::fs::read_to_string(repo("examples/robots/ur5.urdf")).unwrap();
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    assert!(lines[line - 1].contains(from), "{}", lines[line - 1]);
+    lines[line - 1] = lines[line - 1].replace(from, to);
+    file("robot.urdf", lines.join("\n").as_bytes())
+}
+
+#[test]
+fn regression_urdf_collision_values_are_checked() {
+    let options = kinsynth::import::ImportOptions::default();
+    let load =
+        |p: &Path| kinsynth::import::load_robot(p, None, None, None, 4, &options).map(|r| r.kind);
+    // A negative or non-finite cylinder length reached parry's cylinder, which panics on a
+    // negative one; a NaN origin gave NaN bodies.
+    // A negative sphere radius beside larger ones (the chain's capsule radius is the largest)
+    // made a body smaller than nothing.
+    let (cylinder, sphere) = ("link3_body0", "link3_body0_start");
+    for (line, from, to, element, says) in [
+        (
+            114,
+            "length=\"0.425\"",
+            "length=\"-1\"",
+            cylinder,
+            "<cylinder length=\"-1\">",
+        ),
+        (
+            114,
+            "length=\"0.425\"",
+            "length=\"nan\"",
+            cylinder,
+            "<cylinder length=\"NaN\">",
+        ),
+        (
+            112,
+            "xyz=\"0.2125 0 0\"",
+            "xyz=\"nan 0 0\"",
+            cylinder,
+            "<origin xyz=\"NaN 0 0\">",
+        ),
+        (
+            120,
+            "radius=\"0.05\"",
+            "radius=\"-5\"",
+            sphere,
+            "<sphere radius=\"-5\">",
+        ),
+    ] {
+        let (_dir, p) = ur5_with(line, from, to);
+        let e = load(&p).unwrap_err().to_string();
+        assert_one_line("urdf", line, to, &e, &p);
+        assert!(
+            e.contains("link 'link3_dh'")
+                && e.contains(&format!("<collision name=\"{element}\">"))
+                && e.contains(says),
+            "{e}"
+        );
+        run_binary(
+            "urdf",
+            line,
+            to,
+            &[
+                "reach".as_ref(),
+                repo("examples/scenarios/ur5-cell.toml").as_os_str(),
+                "--urdf".as_ref(),
+                p.as_os_str(),
+            ],
+        );
+    }
+    // -0 is 0: a cylinder of no length, not a panic.
+    let (_dir, p) = ur5_with(114, "length=\"0.425\"", "length=\"-0\"");
+    assert_eq!(load(&p).unwrap(), kinsynth::import::BodyKind::Solids);
 }

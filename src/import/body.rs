@@ -23,9 +23,10 @@
 
 use super::urdf::{chain_from_urdf, read_urdf, UrdfChain};
 use crate::collision::body::{DisabledPair, Reason, RobotBody, SelfCollisionConfig, Solid};
-use crate::error::{Error, Result};
+use crate::error::{Error, Num, Result};
 use crate::export::urdf::isometry_of;
 use crate::kinematics::Chain;
+use crate::limits::{within, MAX_ANGLE, MAX_LENGTH, MAX_SETTING};
 use crate::world::convert::to_parry_point;
 use nalgebra::{IsometryMatrix3, Point3, Rotation3, Translation3, Vector3};
 use parry3d_f64::shape::SharedShape;
@@ -150,27 +151,115 @@ fn link_err(link: &str, reason: impl Into<String>) -> Error {
     }
 }
 
-/// The collision elements of one URDF link at `pose` in its carrier, with capsule triples
-/// (cylinder + end spheres of the same radius) joined.
-fn link_pieces(link: &urdf_rs::Link, pose: &IsometryMatrix3<f64>) -> Vec<Piece> {
+/// Collision element `k` of `link`, checked: its origin finite and within the limits
+/// ([`MAX_LENGTH`] m, [`MAX_ANGLE`] rad), every length of its geometry finite, not negative
+/// and at most [`MAX_LENGTH`] m (a `-0` becomes `0`), every mesh scale factor finite, not zero
+/// and at most [`MAX_SETTING`] in magnitude. The error names the link, the element, the
+/// attribute and its value.
+fn checked_collision(
+    link: &urdf_rs::Link,
+    k: usize,
+    c: &urdf_rs::Collision,
+) -> Result<urdf_rs::Collision> {
     use urdf_rs::Geometry as G;
-    let poses: Vec<IsometryMatrix3<f64>> = link
+    let element = match &c.name {
+        Some(name) => format!("<collision name=\"{name}\">"),
+        None => format!("<collision> #{}", k + 1),
+    };
+    let fail = |what: String| link_err(&link.name, format!("{element} {what}"));
+    for (name, v, bound, unit) in [
+        ("xyz", c.origin.xyz.0, MAX_LENGTH, "m"),
+        ("rpy", c.origin.rpy.0, MAX_ANGLE, "rad"),
+    ] {
+        if !v.iter().all(|&x| within(x, bound)) {
+            return Err(fail(format!(
+                "<origin {name}=\"{} {} {}\">: every value must be finite and within ±{bound} {unit}",
+                Num(v[0]),
+                Num(v[1]),
+                Num(v[2])
+            )));
+        }
+    }
+    let length = |shape: &str, attr: &str, v: f64| -> Result<f64> {
+        if v >= 0.0 && within(v, MAX_LENGTH) {
+            Ok(v.abs())
+        } else {
+            Err(fail(format!(
+                "<{shape} {attr}=\"{}\">: must be finite, not negative and at most {MAX_LENGTH} m",
+                Num(v)
+            )))
+        }
+    };
+    let geometry = match &c.geometry {
+        G::Box { size } => {
+            let mut size = *size;
+            for v in size.0.iter_mut() {
+                *v = length("box", "size", *v)?;
+            }
+            G::Box { size }
+        }
+        G::Cylinder { radius, length: l } => G::Cylinder {
+            radius: length("cylinder", "radius", *radius)?,
+            length: length("cylinder", "length", *l)?,
+        },
+        G::Capsule { radius, length: l } => G::Capsule {
+            radius: length("capsule", "radius", *radius)?,
+            length: length("capsule", "length", *l)?,
+        },
+        G::Sphere { radius } => G::Sphere {
+            radius: length("sphere", "radius", *radius)?,
+        },
+        G::Mesh { filename, scale } => {
+            if let Some(s) = scale {
+                if !s.0.iter().all(|&x| x != 0.0 && within(x, MAX_SETTING)) {
+                    return Err(fail(format!(
+                        "<mesh scale=\"{} {} {}\">: every factor must be finite, not zero and within ±{MAX_SETTING}",
+                        Num(s.0[0]),
+                        Num(s.0[1]),
+                        Num(s.0[2])
+                    )));
+                }
+            }
+            G::Mesh {
+                filename: filename.clone(),
+                scale: *scale,
+            }
+        }
+    };
+    Ok(urdf_rs::Collision {
+        name: c.name.clone(),
+        origin: c.origin.clone(),
+        geometry,
+    })
+}
+
+/// The collision elements of one URDF link at `pose` in its carrier, with capsule triples
+/// (cylinder + end spheres of the same radius) joined; an element with a bad value is an error
+/// ([`checked_collision`]).
+fn link_pieces(link: &urdf_rs::Link, pose: &IsometryMatrix3<f64>) -> Result<Vec<Piece>> {
+    use urdf_rs::Geometry as G;
+    let collision = link
         .collision
+        .iter()
+        .enumerate()
+        .map(|(k, c)| checked_collision(link, k, c))
+        .collect::<Result<Vec<_>>>()?;
+    let poses: Vec<IsometryMatrix3<f64>> = collision
         .iter()
         .map(|c| pose * isometry_of(&c.origin))
         .collect();
-    let mut used = vec![false; link.collision.len()];
+    let mut used = vec![false; collision.len()];
     let mut out = Vec::new();
     let sphere_at = |used: &[bool], r: f64, p: &Point3<f64>| -> Option<usize> {
-        link.collision.iter().enumerate().position(|(k, c)| {
+        collision.iter().enumerate().position(|(k, c)| {
             !used[k]
                 && matches!(c.geometry, G::Sphere { radius } if radius == r)
                 && (Point3::from(poses[k].translation.vector) - p).norm() <= MATCH_TOLERANCE
         })
     };
     // Cylinders first claim their end spheres.
-    let mut capsules = vec![None; link.collision.len()];
-    for (k, c) in link.collision.iter().enumerate() {
+    let mut capsules = vec![None; collision.len()];
+    for (k, c) in collision.iter().enumerate() {
         if let G::Cylinder { radius, length } = c.geometry {
             let t = &poses[k];
             let h = t.rotation * Vector3::new(0.0, 0.0, 0.5 * length);
@@ -187,7 +276,7 @@ fn link_pieces(link: &urdf_rs::Link, pose: &IsometryMatrix3<f64>) -> Vec<Piece> 
             }
         }
     }
-    for (k, c) in link.collision.iter().enumerate() {
+    for (k, c) in collision.iter().enumerate() {
         if used[k] {
             continue;
         }
@@ -240,7 +329,7 @@ fn link_pieces(link: &urdf_rs::Link, pose: &IsometryMatrix3<f64>) -> Vec<Piece> 
             },
         });
     }
-    out
+    Ok(out)
 }
 
 /// Where a mesh URI points: `package://NAME/rest` against `packages`, else against the folders
@@ -467,7 +556,7 @@ pub fn robot_body(
             .find(|l| l.name == c.name)
             .expect("carried links are the robot's");
         elements.extend(
-            link_pieces(link, &c.pose)
+            link_pieces(link, &c.pose)?
                 .into_iter()
                 .map(|piece| Element { carried: k, piece }),
         );
