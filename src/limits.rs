@@ -15,8 +15,11 @@ pub const MAX_TEXT_FILE_BYTES: u64 = 16 << 20;
 pub const MAX_CHECKPOINT_BYTES: u64 = 64 << 20;
 /// Largest mesh file (STL or OBJ), in bytes (256 MiB: a binary STL of 5M triangles is 250 MB).
 pub const MAX_MESH_FILE_BYTES: u64 = 256 << 20;
-/// Deepest XML element nesting accepted in a URDF file (a URDF needs about 5).
+/// Deepest XML element nesting accepted in a URDF or SRDF file (either needs about 5).
 pub const MAX_XML_DEPTH: usize = 64;
+/// Deepest XML element nesting accepted in a COLLADA (`.dae`) mesh file (its node hierarchy
+/// may nest, real files stay far below this).
+pub const MAX_MESH_XML_DEPTH: usize = 256;
 /// Most links of a chain: `robot.links` of a scenario, `links` of a design, moving joints of a
 /// URDF chain.
 pub const MAX_LINKS: usize = 64;

@@ -707,3 +707,123 @@ fn regression_urdf_collision_values_are_checked() {
     let (_dir, p) = ur5_with(114, "length=\"0.425\"", "length=\"-0\"");
     assert_eq!(load(&p).unwrap(), kinsynth::import::BodyKind::Solids);
 }
+
+/// An SRDF for the bundled UR5: its adjacent links' pairs, as a setup assistant writes them.
+const UR5_SRDF: &str = r#"<?xml version="1.0"?>
+<robot name="ur5">
+  <disable_collisions link1="base_link" link2="link1" reason="Adjacent"/>
+  <disable_collisions link1="link1" link2="link2_dh" reason="Adjacent"/>
+  <disable_collisions link1="link2" link2="link3_dh" reason="Adjacent"/>
+  <disable_collisions link1="link3" link2="link4_dh" reason="Default"/>
+  <disable_collisions link1="link4" link2="link6" reason="Never"/>
+  <disable_collisions link1="link5" link2="tool0"/>
+</robot>
+"#;
+
+#[test]
+fn mutated_srdf() {
+    let dir = tempfile::tempdir().unwrap();
+    let urdf = repo("examples/robots/ur5.urdf");
+    let cell = repo("examples/scenarios/ur5-cell.toml");
+    let original = UR5_SRDF.as_bytes();
+    // The unmutated file is accepted.
+    let options = |srdf: &Path| kinsynth::import::ImportOptions {
+        srdf: Some(srdf.to_path_buf()),
+        ..Default::default()
+    };
+    let plain = dir.path().join("ur5.srdf");
+    std::fs::write(&plain, original).unwrap();
+    kinsynth::import::load_robot(&urdf, None, None, None, 4, &options(&plain)).unwrap();
+    let mut m = Mutator::new(9);
+    for case in 0..300 {
+        let (bytes, what) = m.mutate(original, true, false);
+        let path = dir.path().join(format!("case{case}.srdf"));
+        std::fs::write(&path, &bytes).unwrap();
+        let (u, o) = (urdf.clone(), options(&path));
+        let result = run_case("srdf", case, &what, &bytes, move || {
+            kinsynth::import::load_robot(&u, None, None, None, 4, &o).map(|r| r.body.len())
+        });
+        if let Err(e) = result {
+            assert_one_line("srdf", case, &what, &e.to_string(), &path);
+        }
+        if case % 25 == 0 {
+            run_binary(
+                "srdf",
+                case,
+                &what,
+                &[
+                    "reach".as_ref(),
+                    cell.as_os_str(),
+                    "--urdf".as_ref(),
+                    urdf.as_os_str(),
+                    "--srdf".as_ref(),
+                    path.as_os_str(),
+                ],
+            );
+        }
+    }
+}
+
+/// `depth` nested elements inside `open` … `close`.
+fn nested(open: &str, depth: usize, close: &str) -> String {
+    format!(
+        "{open}{}{}{close}",
+        "<a>".repeat(depth),
+        "</a>".repeat(depth)
+    )
+}
+
+#[test]
+fn regression_deeply_nested_srdf_and_collada_give_one_line() {
+    // 20,000 nested elements overflowed the stack of the XML reader (SRDF) and of the mesh
+    // loader (COLLADA): a crash instead of an error.
+    let dir = tempfile::tempdir().unwrap();
+    let urdf = repo("examples/robots/ur5.urdf");
+    let srdf = dir.path().join("deep.srdf");
+    std::fs::write(&srdf, nested("<robot>", 20_000, "</robot>")).unwrap();
+    let options = kinsynth::import::ImportOptions {
+        srdf: Some(srdf.clone()),
+        ..Default::default()
+    };
+    let e = kinsynth::import::load_robot(&urdf, None, None, None, 4, &options)
+        .unwrap_err()
+        .to_string();
+    assert_one_line("srdf", 0, "deep", &e, &srdf);
+    assert!(e.contains("nested more than 64 deep"), "{e}");
+
+    // A one-link robot whose body is a COLLADA mesh beside it.
+    let dae = |depth: usize| {
+        nested(
+            "<?xml version=\"1.0\"?><COLLADA xmlns=\"http://www.collada.org/2005/11/COLLADASchema\" version=\"1.4.1\">",
+            depth,
+            "</COLLADA>",
+        )
+    };
+    let robot = dir.path().join("robot.urdf");
+    std::fs::write(
+        &robot,
+        "<robot name=\"r\"><link name=\"a\"/><link name=\"b\"><collision><geometry>\
+         <mesh filename=\"deep.dae\"/></geometry></collision></link>\
+         <joint name=\"j\" type=\"revolute\"><parent link=\"a\"/><child link=\"b\"/>\
+         <axis xyz=\"0 0 1\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/>\
+         </joint></robot>",
+    )
+    .unwrap();
+    let load = || {
+        let options = kinsynth::import::ImportOptions::default();
+        kinsynth::import::load_robot(&robot, None, None, None, 4, &options)
+            .unwrap_err()
+            .to_string()
+    };
+    std::fs::write(dir.path().join("deep.dae"), dae(20_000)).unwrap();
+    let e = load();
+    assert_one_line("collada", 0, "deep", &e, &robot);
+    assert!(
+        e.contains("deep.dae") && e.contains("nested more than 256 deep"),
+        "{e}"
+    );
+    // At the limit it is read (on this test thread's stack) and refused for what it lacks.
+    std::fs::write(dir.path().join("deep.dae"), dae(250)).unwrap();
+    let e = load();
+    assert!(e.contains("deep.dae") && e.contains("no triangles"), "{e}");
+}

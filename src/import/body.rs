@@ -389,6 +389,16 @@ pub fn load_hull(
     if bytes.is_empty() {
         return Err("empty file".into());
     }
+    let collada = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("dae"));
+    let limit = crate::limits::MAX_MESH_XML_DEPTH;
+    if collada && crate::limits::xml_depth(&String::from_utf8_lossy(&bytes), limit) > limit {
+        return Err(format!(
+            "XML elements nested more than {limit} deep (the limit)"
+        ));
+    }
     let scene = mesh_loader::Loader::default()
         .load_from_slice(&bytes, path)
         .map_err(|e| format!("not a readable mesh: {e}"))?;
@@ -436,6 +446,12 @@ pub fn read_srdf(path: &Path, robot: &urdf_rs::Robot, urdf: &Path) -> Result<Vec
         file: path.to_path_buf(),
         message,
     };
+    let limit = crate::limits::MAX_XML_DEPTH;
+    if crate::limits::xml_depth(&text, limit) > limit {
+        return Err(parse(format!(
+            "XML elements nested more than {limit} deep (the limit)"
+        )));
+    }
     let doc =
         roxmltree::Document::parse(&text).map_err(|e| parse(format!("not a valid SRDF: {e}")))?;
     let mut out = Vec::new();
