@@ -827,3 +827,54 @@ fn regression_deeply_nested_srdf_and_collada_give_one_line() {
     let e = load();
     assert!(e.contains("deep.dae") && e.contains("no triangles"), "{e}");
 }
+
+#[test]
+fn mutated_reach_reports() {
+    // A reachability report with paths and the planner's tree, as `view --reach` reads it.
+    let dir = tempfile::tempdir().unwrap();
+    let scenario = repo("examples/scenarios/paper-2d.toml");
+    let json = dir.path().join("reach.json");
+    let o = Command::new(BIN)
+        .arg("reach")
+        .arg(&scenario)
+        .arg("--json")
+        .arg(&json)
+        .arg("--tree")
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let original = std::fs::read(&json).unwrap();
+    let s = Arc::new(Scenario::load(&scenario).unwrap());
+    let dof = s.space.largest().chain().dof();
+    let tasks = s.workspace.tasks.clone();
+    kinsynth::export::view::load_reach(&json, &tasks, dof).unwrap();
+    let mut m = Mutator::new(10);
+    for case in 0..250 {
+        let (bytes, what) = m.mutate(&original, true, false);
+        let path = dir.path().join(format!("case{case}.json"));
+        std::fs::write(&path, &bytes).unwrap();
+        let (p, t) = (path.clone(), tasks.clone());
+        let result = run_case("reach.json", case, &what, &bytes, move || {
+            kinsynth::export::view::load_reach(&p, &t, dof).map(|r| r.targets.len())
+        });
+        if let Err(e) = result {
+            assert_one_line("reach.json", case, &what, &e.to_string(), &path);
+        }
+        if case % 25 == 0 {
+            let html = dir.path().join(format!("case{case}.html"));
+            run_binary(
+                "reach.json",
+                case,
+                &what,
+                &[
+                    "view".as_ref(),
+                    scenario.as_os_str(),
+                    "--reach".as_ref(),
+                    path.as_os_str(),
+                    "-o".as_ref(),
+                    html.as_os_str(),
+                ],
+            );
+        }
+    }
+}
