@@ -27,8 +27,42 @@ enum Command {
     View(cli::view::Args),
 }
 
+/// A command-line error of the parser as one line: its message and the values or arguments it
+/// names, without the usage block and hints (which `--help` gives).
+fn one_line(e: &clap::Error) -> String {
+    let text = e.to_string();
+    let mut parts = Vec::new();
+    for line in text.lines() {
+        let line = line.trim();
+        if line.starts_with("Usage:") {
+            break;
+        }
+        if line.is_empty() || line.starts_with("tip:") || line.starts_with("For more information") {
+            continue;
+        }
+        parts.push(line);
+    }
+    parts.join(" ")
+}
+
 fn main() -> ExitCode {
-    let result = match Cli::parse().command {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            use clap::error::ErrorKind;
+            if matches!(
+                e.kind(),
+                ErrorKind::DisplayHelp
+                    | ErrorKind::DisplayVersion
+                    | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+            ) {
+                e.exit();
+            }
+            eprintln!("{}", one_line(&e));
+            return ExitCode::from(2);
+        }
+    };
+    let result = match cli.command {
         Command::Scenario(a) => cli::scenario::run(a),
         Command::Check(a) => cli::check::run(a),
         Command::Optimize(a) => cli::optimize::run(a),

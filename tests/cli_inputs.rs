@@ -405,3 +405,65 @@ fn binary_stl_declaring_too_many_triangles_is_refused() {
         ],
     );
 }
+
+#[test]
+fn edges_refuses_counts_and_steps_it_cannot_run() {
+    let s = repo("examples/scenarios/paper-2d.toml");
+    let edges = |extra: &[&str]| -> Vec<std::ffi::OsString> {
+        let mut v: Vec<std::ffi::OsString> = vec!["edges".into(), s.clone().into()];
+        v.extend(extra.iter().map(|x| x.into()));
+        v
+    };
+    // A count of 1e11 edges aborted on a 4.8 TB allocation; a non-finite or negative L_max
+    // and no oracle sub-steps ran and printed meaningless rates.
+    for (extra, parts) in [
+        (
+            &["--count", "100000000000"][..],
+            &["--count", "100000000000", "from 1 to 100000"][..],
+        ),
+        (&["--count", "0"], &["--count", "0"]),
+        (&["--substeps", "0"], &["--substeps", "0"]),
+        (
+            &["--lmax", "0.1,nan"],
+            &["--lmax", "NaN", "positive and finite"],
+        ),
+        (&["--lmax", "-1"], &["--lmax", "-1"]),
+    ] {
+        let args = edges(extra);
+        let args: Vec<&OsStr> = args.iter().map(|a| a.as_os_str()).collect();
+        rejected(&args, parts);
+    }
+}
+
+#[test]
+fn command_line_syntax_errors_are_one_line() {
+    let s = repo("examples/scenarios/paper-2d.toml");
+    for (args, part) in [
+        (
+            vec![
+                OsStr::new("edges"),
+                s.as_os_str(),
+                "--count".as_ref(),
+                "-5".as_ref(),
+            ],
+            "'-5'",
+        ),
+        (vec![OsStr::new("edges")], "<FILE>"),
+        (
+            vec![OsStr::new("reach"), s.as_os_str(), "--bogus".as_ref()],
+            "--bogus",
+        ),
+        (vec![OsStr::new("frobnicate")], "frobnicate"),
+    ] {
+        let (code, stderr) = run(&args);
+        assert_eq!(code, Some(2), "{args:?}: {stderr}");
+        assert_eq!(stderr.lines().count(), 1, "{args:?}: {stderr}");
+        assert!(
+            stderr.starts_with("error: ") && stderr.contains(part),
+            "{stderr}"
+        );
+    }
+    // Help and version still print in full and succeed.
+    let (code, _) = run(&[OsStr::new("edges"), "--help".as_ref()]);
+    assert_eq!(code, Some(0));
+}

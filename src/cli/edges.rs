@@ -25,6 +25,13 @@ pub struct Args {
     pub substeps: usize,
 }
 
+/// Most `L_max` values in one run.
+pub const MAX_LMAX_VALUES: usize = 16;
+/// Most edges per `L_max` (`--count`): they are all held in memory with the oracle's verdicts.
+pub const MAX_EDGES: usize = 100_000;
+/// Most oracle sub-steps per edge (`--substeps`).
+pub const MAX_SUBSTEPS: usize = 100_000;
+
 /// Runs the command.
 pub fn run(args: Args) -> Result<(), kinsynth::Error> {
     let Args {
@@ -36,6 +43,34 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
     } = args;
     use kinsynth::collision::{make_checker, oracle, CheckerKind, CollisionScene};
     use std::f64::consts::PI;
+    if lmax.len() > MAX_LMAX_VALUES {
+        return Err(kinsynth::Error::invalid(
+            "--lmax",
+            format!("{} values", lmax.len()),
+            format!("at most {MAX_LMAX_VALUES} values"),
+        ));
+    }
+    for &l in &lmax {
+        if !(l.is_finite() && l > 0.0) {
+            return Err(kinsynth::Error::invalid(
+                "--lmax",
+                l,
+                "every value must be positive and finite",
+            ));
+        }
+    }
+    for (flag, v, max) in [
+        ("--count", count, MAX_EDGES),
+        ("--substeps", substeps, MAX_SUBSTEPS),
+    ] {
+        if !(1..=max).contains(&v) {
+            return Err(kinsynth::Error::invalid(
+                flag,
+                v,
+                format!("must be a whole number from 1 to {max}"),
+            ));
+        }
+    }
     let s = Scenario::load(&file)?;
     let chain = s.space.largest().chain();
     let body = kinsynth::collision::RobotBody::new(&chain, Vec::new(), &s.planner.self_collision);
