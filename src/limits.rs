@@ -17,6 +17,9 @@ pub const MAX_CHECKPOINT_BYTES: u64 = 64 << 20;
 pub const MAX_MESH_FILE_BYTES: u64 = 256 << 20;
 /// Deepest XML element nesting accepted in a URDF or SRDF file (either needs about 5).
 pub const MAX_XML_DEPTH: usize = 64;
+/// Most `<collision>` elements of an imported URDF robot between its base and tip: each is a
+/// body, and the self pairs to decide and check grow with their square.
+pub const MAX_COLLISION_ELEMENTS: usize = 1_000;
 /// Deepest XML element nesting accepted in a COLLADA (`.dae`) mesh file (its node hierarchy
 /// may nest, real files stay far below this).
 pub const MAX_MESH_XML_DEPTH: usize = 256;

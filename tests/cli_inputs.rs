@@ -467,3 +467,56 @@ fn command_line_syntax_errors_are_one_line() {
     let (code, _) = run(&[OsStr::new("edges"), "--help".as_ref()]);
     assert_eq!(code, Some(0));
 }
+
+/// A two-joint URDF robot whose three links carry `n` collision spheres each.
+fn robot_with_spheres(n: usize) -> String {
+    let spheres = |z: f64| {
+        (0..n)
+            .map(|i| {
+                format!(
+                    "<collision><origin xyz=\"{} 0 {z}\"/><geometry><sphere radius=\"0.01\"/></geometry></collision>",
+                    i as f64 * 1e-5
+                )
+            })
+            .collect::<String>()
+    };
+    format!(
+        "<robot name=\"r\"><link name=\"a\">{}</link><link name=\"b\">{}</link><link name=\"c\">{}</link>\
+         <joint name=\"j\" type=\"revolute\"><parent link=\"a\"/><child link=\"b\"/><axis xyz=\"0 0 1\"/>\
+         <limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/></joint>\
+         <joint name=\"j2\" type=\"revolute\"><parent link=\"b\"/><child link=\"c\"/><origin xyz=\"0.3 0 0\"/>\
+         <axis xyz=\"0 1 0\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/></joint></robot>",
+        spheres(0.0),
+        spheres(0.1),
+        spheres(0.2)
+    )
+}
+
+#[test]
+fn urdf_with_too_many_collision_elements_is_refused() {
+    // 3 × 20,000 spheres (a 6 MB file) made 1.2 billion self pairs: the process was killed
+    // for want of memory at 23 GB; 3 × 5,000 took 148 s and 4.3 GB.
+    let dir = tempfile::tempdir().unwrap();
+    let cell = repo("examples/scenarios/ur5-cell.toml");
+    let p = write(dir.path(), "many.urdf", &robot_with_spheres(334));
+    rejected(
+        &[
+            "reach".as_ref(),
+            cell.as_os_str(),
+            "--urdf".as_ref(),
+            p.as_os_str(),
+        ],
+        &["many.urdf", "<collision>", "1002 elements", "at most 1000"],
+    );
+    // At the limit the robot is read.
+    let p = write(dir.path(), "fine.urdf", &robot_with_spheres(333));
+    let (code, stderr) = run(&[
+        "view".as_ref(),
+        cell.as_os_str(),
+        "--urdf".as_ref(),
+        p.as_os_str(),
+        "-o".as_ref(),
+        dir.path().join("v.html").as_os_str(),
+    ]);
+    assert_eq!(code, Some(0), "{stderr}");
+}

@@ -564,13 +564,28 @@ pub fn robot_body(
     if options.body == BodyChoice::Capsules {
         return Ok(capsules(urdf, None));
     }
+    let links: Vec<&urdf_rs::Link> = urdf
+        .carried
+        .iter()
+        .map(|c| {
+            robot
+                .links
+                .iter()
+                .find(|l| l.name == c.name)
+                .expect("carried links are the robot's")
+        })
+        .collect();
+    let count: usize = links.iter().map(|l| l.collision.len()).sum();
+    let limit = crate::limits::MAX_COLLISION_ELEMENTS;
+    if count > limit {
+        return Err(Error::invalid(
+            "<collision>",
+            format!("{count} elements between base and tip"),
+            format!("at most {limit} (the limit; each is a body, and self pairs grow with their square)"),
+        ));
+    }
     let mut elements = Vec::new();
-    for (k, c) in urdf.carried.iter().enumerate() {
-        let link = robot
-            .links
-            .iter()
-            .find(|l| l.name == c.name)
-            .expect("carried links are the robot's");
+    for (k, (c, link)) in urdf.carried.iter().zip(links).enumerate() {
         elements.extend(
             link_pieces(link, &c.pose)?
                 .into_iter()
