@@ -878,3 +878,105 @@ fn mutated_reach_reports() {
         }
     }
 }
+
+#[test]
+fn mutated_collada_meshes() {
+    // The mesh arm with its COLLADA mesh of link 2 mutated, imported with its bodies.
+    let dir = tempfile::tempdir().unwrap();
+    let robots = dir.path().join("examples/robots");
+    let arm = dir.path().join("meshes/arm");
+    std::fs::create_dir_all(&robots).unwrap();
+    std::fs::create_dir_all(&arm).unwrap();
+    for e in std::fs::read_dir(repo("meshes/arm")).unwrap() {
+        let e = e.unwrap();
+        std::fs::copy(e.path(), arm.join(e.file_name())).unwrap();
+    }
+    let urdf = robots.join("mesh_arm.urdf");
+    std::fs::copy(repo("examples/robots/mesh_arm.urdf"), &urdf).unwrap();
+    let load = |u: &Path| {
+        let options = kinsynth::import::ImportOptions::default();
+        kinsynth::import::load_robot(u, None, None, None, 4, &options).map(|r| r.body.len())
+    };
+    load(&urdf).unwrap();
+    let target = arm.join("link2.dae");
+    let original = std::fs::read(&target).unwrap();
+    let mut m = Mutator::new(11);
+    for case in 0..200 {
+        let (bytes, what) = m.mutate(&original, true, false);
+        std::fs::write(&target, &bytes).unwrap();
+        let u = urdf.clone();
+        let result = run_case("link2.dae", case, &what, &bytes, move || load(&u));
+        if let Err(e) = result {
+            assert_one_line("link2.dae", case, &what, &e.to_string(), &urdf);
+        }
+    }
+}
+
+#[test]
+fn regression_collada_sizes_and_name_arrays_are_checked_before_reading() {
+    // The mesh reader reserved memory for what a file declares (`count`, input offsets) and
+    // aborted on 336 GB; on a <Name_array> in a mesh source it never ended; on a missing
+    // source it panicked. Each is now a one-line error naming the URDF, the link and the mesh.
+    let dir = tempfile::tempdir().unwrap();
+    let robot = dir.path().join("robot.urdf");
+    std::fs::write(
+        &robot,
+        "<robot name=\"r\"><link name=\"a\"/><link name=\"b\"><collision><geometry>\
+         <mesh filename=\"m.dae\"/></geometry></collision></link>\
+         <joint name=\"j\" type=\"revolute\"><parent link=\"a\"/><child link=\"b\"/>\
+         <axis xyz=\"0 0 1\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/>\
+         </joint></robot>",
+    )
+    .unwrap();
+    let original = std::fs::read_to_string(repo("meshes/arm/link2.dae")).unwrap();
+    let load = |edits: &[(&str, &str)]| {
+        let mut text = original.clone();
+        for (from, to) in edits {
+            assert!(text.contains(from), "{from}");
+            text = text.replace(from, to);
+        }
+        std::fs::write(dir.path().join("m.dae"), &text).unwrap();
+        let r = robot.clone();
+        run_case("collada", 0, "edit", text.as_bytes(), move || {
+            let options = kinsynth::import::ImportOptions::default();
+            kinsynth::import::load_robot(&r, None, None, None, 4, &options).map(|r| r.body.len())
+        })
+    };
+    assert_eq!(load(&[]).unwrap(), 1);
+    for (edits, says) in [
+        (
+            &[(
+                "<triangles count=\"28\">",
+                "<triangles count=\"28000000000\">",
+            )][..],
+            "more indices than its <p> elements hold",
+        ),
+        (
+            &[("offset=\"0\"", "offset=\"4000000000\"")],
+            "<input offset=\"4000000000\"> in <triangles>",
+        ),
+        (
+            &[("count=\"48\"", "count=\"4000000000\"")],
+            "more values than the element holds",
+        ),
+        (
+            &[
+                ("<float_array", "<Name_array"),
+                ("</float_array>", "</Name_array>"),
+            ],
+            "<Name_array> with values in a geometry",
+        ),
+        (
+            &[("source=\"#link2-positions\"", "source=\"#nowhere\"")],
+            "not a readable mesh",
+        ),
+    ] {
+        let to = edits[0].1;
+        let e = match load(edits) {
+            Ok(n) => panic!("{to}: accepted, {n} bodies"),
+            Err(e) => e.to_string(),
+        };
+        assert_one_line("collada", 0, to, &e, &robot);
+        assert!(e.contains("m.dae") && e.contains(says), "{to}: {e}");
+    }
+}

@@ -378,6 +378,121 @@ pub fn resolve_mesh(
     })
 }
 
+/// Checks what the mesh reader trusts in a COLLADA file before it reads it: every size it
+/// reserves memory for must fit in the text that holds the values (an array's `count`, a
+/// primitive's `count` times its vertices and inputs against its `<p>` indices, input offsets
+/// at most 1,024), and a mesh source holds numbers (the reader never ends on a `<Name_array>` or
+/// `<IDREF_array>` with values there). Anything else is left to the reader.
+fn check_collada(text: &str) -> std::result::Result<(), String> {
+    let doc = roxmltree::Document::parse(text).map_err(|e| format!("not a readable mesh: {e}"))?;
+    let Some(geometries) = doc
+        .root_element()
+        .children()
+        .find(|n| n.has_tag_name("library_geometries"))
+    else {
+        return Ok(());
+    };
+    let number = |n: roxmltree::Node, attr: &str| -> std::result::Result<u64, String> {
+        match n.attribute(attr) {
+            None => Ok(0),
+            Some(v) => v.trim().parse::<u64>().map_err(|_| {
+                format!(
+                    "<{} {attr}=\"{v}\">: not a whole number",
+                    n.tag_name().name()
+                )
+            }),
+        }
+    };
+    let text_len = |n: roxmltree::Node| n.text().map_or(0, |t| t.trim().len()) as u64;
+    for n in geometries.descendants().filter(|n| n.is_element()) {
+        let name = n.tag_name().name();
+        if name.ends_with("_array") {
+            let count = number(n, "count")?;
+            if count > 0 && matches!(name, "Name_array" | "IDREF_array") && text_len(n) > 0 {
+                return Err(format!(
+                    "<{name}> with values in a geometry: a mesh source must hold numbers"
+                ));
+            }
+            if count > text_len(n) + 1 {
+                return Err(format!(
+                    "<{name} count=\"{count}\">: more values than the element holds"
+                ));
+            }
+            continue;
+        }
+        let per_face = match name {
+            "triangles" => Some(3),
+            "lines" => Some(2),
+            "polylist" | "polygons" | "trifans" | "tristrips" | "linestrips" => None,
+            _ => continue,
+        };
+        let count = number(n, "count")?;
+        let mut stride = 1;
+        let (mut indices, mut vcount) = (0, None);
+        for c in n.children().filter(|c| c.is_element()) {
+            match c.tag_name().name() {
+                "input" => {
+                    let offset = number(c, "offset")?;
+                    if offset > 1024 {
+                        return Err(format!(
+                            "<input offset=\"{offset}\"> in <{name}>: at most 1024"
+                        ));
+                    }
+                    stride = stride.max(offset + 1);
+                }
+                "p" => indices += text_len(c) + 1,
+                "vcount" => vcount = Some(c),
+                _ => {}
+            }
+        }
+        let vertices = match (per_face, vcount) {
+            (Some(k), _) => count.saturating_mul(k),
+            (None, Some(v)) if name == "polylist" => {
+                if count > text_len(v) + 1 {
+                    return Err(format!(
+                        "<polylist count=\"{count}\">: more polygons than its <vcount> holds"
+                    ));
+                }
+                let values = v.text().unwrap_or("").split_ascii_whitespace();
+                values
+                    .take(count as usize)
+                    .map(|x| x.parse::<u64>().unwrap_or(0))
+                    .fold(0u64, u64::saturating_add)
+            }
+            (None, _) => count,
+        };
+        if vertices.saturating_mul(stride) > indices {
+            return Err(format!(
+                "<{name} count=\"{count}\">: more indices than its <p> elements hold"
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Runs `f` and returns its value, or `None` if it panicked, without printing the panic's
+/// message: for a third-party reader that panics on some malformed input instead of returning
+/// an error. Other panics, on any thread, are reported as before.
+fn catch_quietly<T>(f: impl FnOnce() -> T) -> Option<T> {
+    use std::cell::Cell;
+    thread_local! {
+        static QUIET: Cell<bool> = const { Cell::new(false) };
+    }
+    static HOOK: std::sync::Once = std::sync::Once::new();
+    HOOK.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            if !QUIET.with(Cell::get) {
+                previous(info);
+            }
+        }));
+    });
+    let was = QUIET.with(|q| q.replace(true));
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f));
+    QUIET.with(|q| q.set(was));
+    result.ok()
+}
+
 /// The convex hull of the mesh file `path` (STL, OBJ or COLLADA), each vertex scaled by
 /// `scale`, with its number of vertices. The error says what is wrong with the file.
 pub fn load_hull(
@@ -399,8 +514,13 @@ pub fn load_hull(
             "XML elements nested more than {limit} deep (the limit)"
         ));
     }
-    let scene = mesh_loader::Loader::default()
-        .load_from_slice(&bytes, path)
+    if collada {
+        check_collada(&String::from_utf8_lossy(&bytes))?;
+    }
+    // The COLLADA reader panics on some malformed files (a missing source, a short array)
+    // instead of returning an error: such a panic is this file's error too.
+    let scene = catch_quietly(|| mesh_loader::Loader::default().load_from_slice(&bytes, path))
+        .ok_or_else(|| "not a readable mesh: the mesh reader failed on it".to_string())?
         .map_err(|e| format!("not a readable mesh: {e}"))?;
     let mut points = Vec::new();
     for m in &scene.meshes {
