@@ -764,6 +764,24 @@ fn mutated_srdf() {
     }
 }
 
+/// `DIR/robot.urdf`: a robot of one revolute joint whose moving link's body is the mesh `mesh`
+/// (a path relative to `DIR`).
+fn one_link_robot(dir: &Path, mesh: &str) -> PathBuf {
+    let robot = dir.join("robot.urdf");
+    std::fs::write(
+        &robot,
+        format!(
+            "<robot name=\"r\"><link name=\"a\"/><link name=\"b\"><collision><geometry>\
+             <mesh filename=\"{mesh}\"/></geometry></collision></link>\
+             <joint name=\"j\" type=\"revolute\"><parent link=\"a\"/><child link=\"b\"/>\
+             <axis xyz=\"0 0 1\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/>\
+             </joint></robot>"
+        ),
+    )
+    .unwrap();
+    robot
+}
+
 /// `depth` nested elements inside `open` … `close`.
 fn nested(open: &str, depth: usize, close: &str) -> String {
     format!(
@@ -799,16 +817,7 @@ fn regression_deeply_nested_srdf_and_collada_give_one_line() {
             "</COLLADA>",
         )
     };
-    let robot = dir.path().join("robot.urdf");
-    std::fs::write(
-        &robot,
-        "<robot name=\"r\"><link name=\"a\"/><link name=\"b\"><collision><geometry>\
-         <mesh filename=\"deep.dae\"/></geometry></collision></link>\
-         <joint name=\"j\" type=\"revolute\"><parent link=\"a\"/><child link=\"b\"/>\
-         <axis xyz=\"0 0 1\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/>\
-         </joint></robot>",
-    )
-    .unwrap();
+    let robot = one_link_robot(dir.path(), "deep.dae");
     let load = || {
         let options = kinsynth::import::ImportOptions::default();
         kinsynth::import::load_robot(&robot, None, None, None, 4, &options)
@@ -918,16 +927,7 @@ fn regression_collada_sizes_and_name_arrays_are_checked_before_reading() {
     // aborted on 336 GB; on a <Name_array> in a mesh source it never ended; on a missing
     // source it panicked. Each is now a one-line error naming the URDF, the link and the mesh.
     let dir = tempfile::tempdir().unwrap();
-    let robot = dir.path().join("robot.urdf");
-    std::fs::write(
-        &robot,
-        "<robot name=\"r\"><link name=\"a\"/><link name=\"b\"><collision><geometry>\
-         <mesh filename=\"m.dae\"/></geometry></collision></link>\
-         <joint name=\"j\" type=\"revolute\"><parent link=\"a\"/><child link=\"b\"/>\
-         <axis xyz=\"0 0 1\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/>\
-         </joint></robot>",
-    )
-    .unwrap();
+    let robot = one_link_robot(dir.path(), "m.dae");
     let original = std::fs::read_to_string(repo("meshes/arm/link2.dae")).unwrap();
     let load = |edits: &[(&str, &str)]| {
         let mut text = original.clone();
