@@ -142,6 +142,18 @@ pub fn read_text(path: &Path, limit: u64) -> io::Result<String> {
     })
 }
 
+/// `Err` with the message every XML input gives when its elements nest deeper than `limit`
+/// ([`xml_depth`]), checked before any parser (which may recurse) sees the text.
+pub fn check_xml_depth(text: &str, limit: usize) -> Result<(), String> {
+    if xml_depth(text, limit) > limit {
+        Err(format!(
+            "XML elements nested more than {limit} deep (the limit)"
+        ))
+    } else {
+        Ok(())
+    }
+}
+
 /// The deepest element nesting of an XML document, found by a scan that needs no recursion
 /// (comments, processing instructions, CDATA sections, declarations and quoted attribute
 /// values are skipped). Stops early and returns a value above `limit` as soon as the nesting

@@ -428,6 +428,10 @@ fn edges_refuses_counts_and_steps_it_cannot_run() {
             &["--lmax", "NaN", "positive and finite"],
         ),
         (&["--lmax", "-1"], &["--lmax", "-1"]),
+        (
+            &["--lmax", "1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17"],
+            &["--lmax", "17 values", "at most 16"],
+        ),
     ] {
         let args = edges(extra);
         let args: Vec<&OsStr> = args.iter().map(|a| a.as_os_str()).collect();

@@ -491,15 +491,38 @@ fn mutated_designs() {
 
 /// Mutants of the bundled robot `robots/NAME`, written beside a `meshes` link (so that its
 /// relative and `package://` mesh paths resolve), imported with their bodies as `reach --urdf`
-/// does, and planned with in the UR5 cell.
-fn fuzz_urdf(name: &str, cases: usize, seed: u64) {
+/// does, and planned with among the UR5 cell's tasks: with its obstacles when `obstacles`,
+/// else in the empty cell (where a robot whose home pose touches the cell still plans).
+fn fuzz_urdf(name: &str, cases: usize, seed: u64, obstacles: bool) {
     let (dir, _) = layout();
     let robots = dir.path().join("examples/robots");
     std::fs::create_dir_all(&robots).unwrap();
     let cell = repo("examples/scenarios/ur5-cell.toml");
-    let s = Arc::new(Scenario::load(&cell).unwrap());
+    let mut s = Scenario::load(&cell).unwrap();
+    if !obstacles {
+        s.workspace.obstacles.clear();
+    }
+    let s = Arc::new(s);
     let scene = Arc::new(CollisionScene::new(&s.workspace));
     let original = std::fs::read(repo(&format!("examples/robots/{name}"))).unwrap();
+    // The unmutated robot imports and plans: the mutants start from something usable.
+    let options = kinsynth::import::ImportOptions::default();
+    let plain = robots.join(name);
+    std::fs::write(&plain, &original).unwrap();
+    let r = kinsynth::import::load_robot(&plain, None, None, None, 4, &options).unwrap();
+    let report = reachability_of(
+        &r.urdf.chain,
+        Arc::new(r.body),
+        &scene,
+        &s.workspace.tasks,
+        &quick_planner(&s.planner),
+        1,
+        0,
+    );
+    assert!(
+        report.reachability > 0.0,
+        "{name} reaches nothing unmutated"
+    );
     let mut m = Mutator::new(seed);
     for case in 0..cases {
         let (bytes, what) = m.mutate(&original, true, false);
@@ -543,15 +566,15 @@ fn fuzz_urdf(name: &str, cases: usize, seed: u64) {
 
 #[test]
 fn mutated_urdf() {
-    fuzz_urdf("ur5.urdf", 400, 6);
+    fuzz_urdf("ur5.urdf", 400, 6, true);
 }
 
 /// The URDF robot whose bodies are meshes (STL and COLLADA, by relative and `package://`
-/// paths).
+/// paths), in the empty cell: its home pose touches the UR5 cell's beam.
 #[cfg(unix)]
 #[test]
 fn mutated_mesh_urdf() {
-    fuzz_urdf("mesh_arm.urdf", 120, 8);
+    fuzz_urdf("mesh_arm.urdf", 120, 8, false);
 }
 
 /// A finished short run of paper-2d: its directory holds `checkpoint.json` and `best.json`.
@@ -680,6 +703,13 @@ fn regression_urdf_collision_values_are_checked() {
             "radius=\"-5\"",
             sphere,
             "<sphere radius=\"-5\">",
+        ),
+        (
+            112,
+            "rpy=\"0 -1.5707963267948966 0\"",
+            "rpy=\"0 2000 0\"",
+            cylinder,
+            "<origin rpy=\"0 2000 0\">",
         ),
     ] {
         let (_dir, p) = ur5_with(line, from, to);
@@ -970,6 +1000,10 @@ fn regression_collada_sizes_and_name_arrays_are_checked_before_reading() {
             &[("source=\"#link2-positions\"", "source=\"#nowhere\"")],
             "not a readable mesh",
         ),
+        (
+            &[("offset=\"0\"", "offset=\"-1\"")],
+            "<input offset=\"-1\">: not a whole number",
+        ),
     ] {
         let to = edits[0].1;
         let e = match load(edits) {
@@ -978,5 +1012,36 @@ fn regression_collada_sizes_and_name_arrays_are_checked_before_reading() {
         };
         assert_one_line("collada", 0, to, &e, &robot);
         assert!(e.contains("m.dae") && e.contains(says), "{to}: {e}");
+    }
+}
+
+#[test]
+fn regression_urdf_mesh_scale_and_box_size_are_checked() {
+    let original = std::fs::read_to_string(repo("examples/robots/mesh_arm.urdf")).unwrap();
+    for (from, to, link, says) in [
+        (
+            "link2.dae\" scale=\"1 1 1\"",
+            "link2.dae\" scale=\"0 1 1\"",
+            "link2",
+            "<collision> #1 <mesh scale=\"0 1 1\">: every factor must be finite, not zero",
+        ),
+        (
+            "<box size=\"0.06 0.02 0.08\"/>",
+            "<box size=\"0.06 -0.02 0.08\"/>",
+            "link6",
+            "<collision name=\"gripper\"> <box size=\"-0.02\">: must be finite, not negative",
+        ),
+    ] {
+        assert!(original.contains(from), "{from}");
+        let (_dir, p) = file("robot.urdf", original.replace(from, to).as_bytes());
+        let options = kinsynth::import::ImportOptions::default();
+        let e = kinsynth::import::load_robot(&p, None, None, None, 4, &options)
+            .unwrap_err()
+            .to_string();
+        assert_one_line("urdf", 0, to, &e, &p);
+        assert!(
+            e.contains(&format!("link '{link}'")) && e.contains(says),
+            "{e}"
+        );
     }
 }

@@ -51,13 +51,7 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         ));
     }
     for &l in &lmax {
-        if !(l.is_finite() && l > 0.0) {
-            return Err(kinsynth::Error::invalid(
-                "--lmax",
-                l,
-                "every value must be positive and finite",
-            ));
-        }
+        super::checked_lmax(l)?;
     }
     for (flag, v, max) in [
         ("--count", count, MAX_EDGES),

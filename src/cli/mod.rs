@@ -36,17 +36,24 @@ pub fn override_planner(
         planner.checker = c;
     }
     if let Some(l) = lmax {
-        if !(l.is_finite() && l > 0.0) {
-            return Err(kinsynth::Error::invalid(
-                "--lmax",
-                l,
-                "must be positive and finite",
-            ));
-        }
-        planner.l_max = l;
+        planner.l_max = checked_lmax(l)?;
         planner.schedule = None;
     }
     Ok(())
+}
+
+/// A step bound given as `--lmax`: refused, naming the flag and the value, unless it is
+/// positive and finite.
+pub fn checked_lmax(l: f64) -> Result<f64, kinsynth::Error> {
+    if l.is_finite() && l > 0.0 {
+        Ok(l)
+    } else {
+        Err(kinsynth::Error::invalid(
+            "--lmax",
+            l,
+            "must be positive and finite",
+        ))
+    }
 }
 
 /// A whole number given as `flag`: refused, naming the flag and the value, unless it is an

@@ -381,9 +381,11 @@ pub fn resolve_mesh(
 /// Checks what the mesh reader trusts in a COLLADA file before it reads it: every size it
 /// reserves memory for must fit in the text that holds the values (an array's `count`, a
 /// primitive's `count` times its vertices and inputs against its `<p>` indices, input offsets
-/// at most 1,024), and a mesh source holds numbers (the reader never ends on a `<Name_array>` or
+/// at most `MAX_OFFSET`), and a mesh source holds numbers (the reader never ends on a `<Name_array>` or
 /// `<IDREF_array>` with values there). Anything else is left to the reader.
 fn check_collada(text: &str) -> std::result::Result<(), String> {
+    /// Largest `<input offset>` of a primitive (real files use a handful of inputs).
+    const MAX_OFFSET: u64 = 1024;
     let doc = roxmltree::Document::parse(text).map_err(|e| format!("not a readable mesh: {e}"))?;
     let Some(geometries) = doc
         .root_element()
@@ -433,9 +435,9 @@ fn check_collada(text: &str) -> std::result::Result<(), String> {
             match c.tag_name().name() {
                 "input" => {
                     let offset = number(c, "offset")?;
-                    if offset > 1024 {
+                    if offset > MAX_OFFSET {
                         return Err(format!(
-                            "<input offset=\"{offset}\"> in <{name}>: at most 1024"
+                            "<input offset=\"{offset}\"> in <{name}>: at most {MAX_OFFSET}"
                         ));
                     }
                     stride = stride.max(offset + 1);
@@ -508,14 +510,10 @@ pub fn load_hull(
         .extension()
         .and_then(|e| e.to_str())
         .is_some_and(|e| e.eq_ignore_ascii_case("dae"));
-    let limit = crate::limits::MAX_MESH_XML_DEPTH;
-    if collada && crate::limits::xml_depth(&String::from_utf8_lossy(&bytes), limit) > limit {
-        return Err(format!(
-            "XML elements nested more than {limit} deep (the limit)"
-        ));
-    }
     if collada {
-        check_collada(&String::from_utf8_lossy(&bytes))?;
+        let text = String::from_utf8_lossy(&bytes);
+        crate::limits::check_xml_depth(&text, crate::limits::MAX_MESH_XML_DEPTH)?;
+        check_collada(&text)?;
     }
     // The COLLADA reader panics on some malformed files (a missing source, a short array)
     // instead of returning an error: such a panic is this file's error too.
@@ -566,12 +564,7 @@ pub fn read_srdf(path: &Path, robot: &urdf_rs::Robot, urdf: &Path) -> Result<Vec
         file: path.to_path_buf(),
         message,
     };
-    let limit = crate::limits::MAX_XML_DEPTH;
-    if crate::limits::xml_depth(&text, limit) > limit {
-        return Err(parse(format!(
-            "XML elements nested more than {limit} deep (the limit)"
-        )));
-    }
+    crate::limits::check_xml_depth(&text, crate::limits::MAX_XML_DEPTH).map_err(parse)?;
     let doc =
         roxmltree::Document::parse(&text).map_err(|e| parse(format!("not a valid SRDF: {e}")))?;
     let mut out = Vec::new();

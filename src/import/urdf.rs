@@ -104,16 +104,12 @@ pub fn read_urdf(path: &Path) -> Result<urdf_rs::Robot> {
                 source,
             }
         })?;
-    let depth = crate::limits::xml_depth(&text, crate::limits::MAX_XML_DEPTH);
-    if depth > crate::limits::MAX_XML_DEPTH {
-        return Err(Error::Parse {
+    crate::limits::check_xml_depth(&text, crate::limits::MAX_XML_DEPTH).map_err(|message| {
+        Error::Parse {
             file: path.to_path_buf(),
-            message: format!(
-                "XML elements nested more than {} deep (the limit)",
-                crate::limits::MAX_XML_DEPTH
-            ),
-        });
-    }
+            message,
+        }
+    })?;
     urdf_rs::read_from_string(&text).map_err(|e| Error::Parse {
         file: path.to_path_buf(),
         message: format!("not a valid URDF: {e}"),
