@@ -42,7 +42,7 @@ pub const MAX_LENGTH: f64 = 1e3;
 /// Largest magnitude of an angle, in radians: DH `θ` and `α`, revolute limits, `rpy`.
 pub const MAX_ANGLE: f64 = 1e3;
 /// Most RRT iterations per evaluation (`planner.max_iterations`, `planner.schedule`).
-pub const MAX_ITERATIONS: usize = 1_000_000;
+pub const MAX_ITERATIONS: usize = 100_000;
 /// Most damped-least-squares steps per extension (`planner.ik_steps`).
 pub const MAX_IK_STEPS: usize = 10_000;
 /// Most backward trees per task (`planner.postures`).

@@ -339,6 +339,24 @@ fn huge_scenario_values_are_refused_naming_field_and_value() {
         &format!("{ROBOT}\n[planner]\nmax_iterations = 1000000000\n{TASK}"),
     );
     rejected(&check(&p), &["planner.max_iterations", "1000000000"]);
+    // The iteration limit is 100,000: the nearest-node scan makes a run's time grow with the
+    // square of its iterations.
+    for (n, ok) in [(100_000, true), (100_001, false)] {
+        let p = write(
+            dir.path(),
+            "s.toml",
+            &format!("{ROBOT}\n[planner]\nmax_iterations = {n}\n{TASK}"),
+        );
+        let (code, stderr) = run(&check(&p));
+        if ok {
+            assert_eq!(code, Some(0), "{stderr}");
+        } else {
+            rejected(
+                &check(&p),
+                &["planner.max_iterations", "100001", "1..=100000"],
+            );
+        }
+    }
 }
 
 #[test]
