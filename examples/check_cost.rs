@@ -14,7 +14,8 @@
 //! runs (default 100) per checker at π/4, and prints the mean time per run; the scenario
 //! defaults to the bundled paper-3d. Set `CHECKER=segment` or `CHECKER=certified` to run only
 //! one, `AIMED_STEERING=on` to plan with `planner.aimed_steering`, and `IK_CLAMP=on` to plan
-//! without `planner.ik_hold_limits` (the paper's clamped inverse-kinematics steps). Under
+//! without `planner.ik_hold_limits` (the paper's clamped inverse-kinematics steps), and
+//! `SELF_COLLISION=off` to check `edges` without self pairs (what they cost). Under
 //! `valgrind --tool=cachegrind`, the instruction count of a run with `REPS` minus that of a run
 //! with 0 (the set-up alone), divided by the number of edges or runs, is the instruction cost
 //! the README quotes.
@@ -49,6 +50,7 @@ fn main() {
     };
     let aimed = std::env::var("AIMED_STEERING").is_ok_and(|v| v == "on");
     let clamp = std::env::var("IK_CLAMP").is_ok_and(|v| v == "on");
+    let self_off = std::env::var("SELF_COLLISION").is_ok_and(|v| v == "off");
     let load = |path: &str| Scenario::load(Path::new(path)).expect("scenario");
     match mode {
         "edges" => {
@@ -64,7 +66,13 @@ fn main() {
             let edges = sample_edges(&scene, &chain, &body, l_max, s.planner.lambda, 256, 7);
             for kind in kinds {
                 let checker = make_checker(kind, scene.clone(), BodyModel::Capsules);
-                let mut scratch = Scratch::new(&chain);
+                let mut scratch = if self_off {
+                    let off = kinsynth::collision::SelfCollisionConfig::off();
+                    let body = kinsynth::collision::RobotBody::new(&chain, Vec::new(), &off);
+                    Scratch::with_body(&chain, Arc::new(body))
+                } else {
+                    Scratch::new(&chain)
+                };
                 let start = Instant::now();
                 let mut free = 0usize;
                 for _ in 0..reps {
