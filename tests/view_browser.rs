@@ -434,3 +434,64 @@ fn a_large_mesh_is_drawn_whole() {
         result["view"]["loadMs"].as_f64().unwrap()
     );
 }
+
+/// A mesh placed many times (here the pipe bundle, 200 times on a grid) is written into the
+/// page once and drawn at every place: each copy shows the bundle's triangles, the page stays
+/// within a few kilobytes of the scene with one bundle, and the scene still renders.
+#[test]
+fn a_mesh_placed_many_times_is_written_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(manifest("examples/scenarios/pipework.toml")).unwrap();
+    let bundle = manifest("meshes/pipe_bundle.obj");
+    let one = text.replace(
+        "../../meshes/",
+        &format!("{}/", manifest("meshes").display()),
+    );
+    let mut extra = String::new();
+    for k in 0..200 {
+        extra += &format!(
+            "\n[[obstacle]]\nname = \"copy {k}\"\nshape = \"mesh\"\nfile = {:?}\n\
+             representation = \"decomposition\"\nposition = [{}, {}, 0.4]\n",
+            bundle.display().to_string(),
+            -3.0 + 0.3 * (k % 20) as f64,
+            2.0 + 0.3 * (k / 20) as f64
+        );
+    }
+    let many = one.replacen("[[task]]", &format!("{extra}\n[[task]]"), 1);
+    let mut bytes = Vec::new();
+    for (name, text) in [("one", &one), ("many", &many)] {
+        let file = dir.path().join(format!("{name}.toml"));
+        std::fs::write(&file, text).unwrap();
+        let page = dir.path().join(format!("{name}.html"));
+        run(&[
+            "view".as_ref(),
+            file.as_os_str(),
+            "-o".as_ref(),
+            page.as_os_str(),
+        ]);
+        bytes.push(std::fs::metadata(&page).unwrap().len());
+        if name == "many" {
+            let result = selftest(&page);
+            let errors = result["errors"].as_array().unwrap();
+            assert!(errors.is_empty(), "console errors: {errors:?}");
+            let obstacles = result["view"]["obstacles"].as_array().unwrap();
+            assert_eq!(obstacles.len(), 203);
+            let first = obstacles
+                .iter()
+                .find(|o| o["name"] == "pipe bundle")
+                .unwrap();
+            assert!(first["triangles"].as_u64().unwrap() > 100, "{first}");
+            for o in obstacles
+                .iter()
+                .filter(|o| o["name"] != "vessel" && o["name"] != "floor")
+            {
+                assert_eq!(o["triangles"], first["triangles"], "{o}");
+                assert_eq!(o["representation"], "decomposition", "{o}");
+            }
+            assert!(result["canvas"]["nonBackground"].as_f64().unwrap() > 0.02);
+        }
+    }
+    // 200 more obstacles cost their names and poses (about 200 bytes each), not their
+    // triangles (the bundle's alone are tens of kilobytes).
+    assert!(bytes[1] < bytes[0] + 200 * 300, "{bytes:?}");
+}

@@ -20,7 +20,7 @@ use crate::limits::{
     within, MAX_ANGLE, MAX_COLLIDERS_PER_LINK, MAX_LENGTH, MAX_LINKS, MAX_OBSTACLES,
     MAX_POPULATION, MAX_SCENE_MESH_TRIANGLES, MAX_SETTING, MAX_TASKS,
 };
-use crate::world::{Contact, Obstacle, ObstacleShape, TaskOrientation, Workspace};
+use crate::world::{Contact, MeshCache, Obstacle, ObstacleShape, TaskOrientation, Workspace};
 use nalgebra::Point3;
 use std::path::{Path, PathBuf};
 
@@ -543,8 +543,10 @@ impl Scenario {
         check_count(spec.task.len(), 0, MAX_TASKS, "task")?;
         let mut obstacles = Vec::with_capacity(spec.obstacle.len());
         let mut mesh_triangles = 0usize;
+        // A mesh placed many times is read and converted once.
+        let mut meshes = MeshCache::new();
         for (k, o) in spec.obstacle.iter().enumerate() {
-            let obstacle = Self::obstacle(k, o, dir)?;
+            let obstacle = Self::obstacle(k, o, dir, &mut meshes)?;
             mesh_triangles += obstacle.mesh_triangles();
             check(
                 mesh_triangles <= MAX_SCENE_MESH_TRIANGLES,
@@ -685,7 +687,12 @@ impl Scenario {
         }
     }
 
-    fn obstacle(k: usize, o: &ObstacleSpec, dir: &Path) -> Result<Obstacle> {
+    fn obstacle(
+        k: usize,
+        o: &ObstacleSpec,
+        dir: &Path,
+        meshes: &mut MeshCache,
+    ) -> Result<Obstacle> {
         let prefix = format!("obstacle[{k}]");
         let field = |f: &str| format!("{prefix}.{f}");
         check_vector(&o.position, MAX_LENGTH, " m", field("position"))?;
@@ -780,7 +787,7 @@ impl Scenario {
             placement.rotation = uq.to_rotation_matrix();
         }
         let name = o.name.clone().unwrap_or_else(|| format!("{kind} {k}"));
-        Obstacle::new(name, geometry, placement).map_err(at(&prefix))
+        Obstacle::with_cache(name, geometry, placement, meshes).map_err(at(&prefix))
     }
 
     /// Links of the scenario's largest design ([`DesignSpace::largest`]) that touch an obstacle
@@ -794,6 +801,7 @@ impl Scenario {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::sync::Arc;
 
     const MINIMAL: &str = r#"
 [robot]
@@ -834,5 +842,73 @@ point = [0.5, 0.0, 0.2]
         let e = Scenario::parse(&text).unwrap_err().to_string();
         assert!(e.contains("obstacle[0]") && e.contains("radus"), "{e}");
         assert!(e.contains("line"), "{e}");
+    }
+
+    /// The pipework scenario with its pipe bundle placed `copies` times, 0.3 m apart along x,
+    /// and once more scaled by 1.1.
+    fn bundle_copies(copies: usize) -> Scenario {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scenarios");
+        let text = std::fs::read_to_string(dir.join("pipework.toml")).unwrap();
+        let block = "[[obstacle]]\nname = \"pipe bundle\"\nshape = \"mesh\"\n\
+                     file = \"../../meshes/pipe_bundle.obj\"\n\
+                     representation = \"decomposition\"\n";
+        assert!(text.contains(block));
+        let mut extra = String::new();
+        for k in 0..copies {
+            extra += &format!(
+                "\n[[obstacle]]\nname = \"copy {k}\"\nshape = \"mesh\"\n\
+                 file = \"../../meshes/pipe_bundle.obj\"\nrepresentation = \"decomposition\"\n\
+                 position = [{}, 1.5, 0.4]\nrpy = [0.0, 0.0, {}]\n",
+                0.3 * k as f64,
+                0.1 * k as f64
+            );
+        }
+        extra += "\n[[obstacle]]\nname = \"scaled\"\nshape = \"mesh\"\n\
+                  file = \"../../meshes/pipe_bundle.obj\"\nrepresentation = \"decomposition\"\n\
+                  position = [0.0, -1.5, 0.4]\nscale = 1.1\n";
+        let text = text.replacen("[[task]]", &format!("{extra}\n[[task]]"), 1);
+        Scenario::from_spec_in(&Scenario::parse(&text).unwrap(), &dir).unwrap()
+    }
+
+    /// A mesh placed many times is built once: the copies share the first one's shape (a
+    /// different scale is another shape), each at its own pose, and each copy's distances are
+    /// those of the same obstacle built alone.
+    #[test]
+    fn a_mesh_placed_many_times_is_built_once() {
+        let s = bundle_copies(4);
+        let obstacles = &s.workspace.obstacles;
+        let bundle = obstacles
+            .iter()
+            .position(|o| o.name == "pipe bundle")
+            .unwrap();
+        let shared = |o: &Obstacle| Arc::ptr_eq(&o.shape().0, &obstacles[bundle].shape().0);
+        let copies: Vec<&Obstacle> = obstacles
+            .iter()
+            .filter(|o| o.name.starts_with("copy "))
+            .collect();
+        assert_eq!(copies.len(), 4);
+        assert!(copies.iter().all(|o| shared(o)));
+        let scaled = obstacles.iter().find(|o| o.name == "scaled").unwrap();
+        assert!(!shared(scaled));
+        assert!(!shared(
+            obstacles.iter().find(|o| o.name == "vessel").unwrap()
+        ));
+        for o in copies.iter().chain([&scaled]) {
+            let alone = Obstacle::new("alone", o.geometry.clone(), o.placement).unwrap();
+            assert!(!Arc::ptr_eq(&alone.shape().0, &o.shape().0));
+            let centre = Point3::from(o.placement.translation.vector);
+            for offset in [[0.0, 0.0, 0.0], [0.05, 0.1, -0.02], [0.4, 0.0, 0.3]] {
+                let p = centre + nalgebra::Vector3::from(offset);
+                let (a, b) = (
+                    o.signed_distance_to_point(&p),
+                    alone.signed_distance_to_point(&p),
+                );
+                assert_eq!(a, b, "{} at {p}", o.name);
+            }
+        }
+        // The copies stand where they were placed: the distance at each one's centre differs
+        // from the distance at that point to the first copy.
+        let p = Point3::from(copies[3].placement.translation.vector);
+        assert!(copies[0].signed_distance_to_point(&p) > copies[3].signed_distance_to_point(&p));
     }
 }

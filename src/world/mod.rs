@@ -6,6 +6,6 @@ pub mod obstacle;
 pub mod task;
 pub mod workspace;
 
-pub use obstacle::{MeshRepresentation, Obstacle, ObstacleShape};
+pub use obstacle::{MeshCache, MeshRepresentation, Obstacle, ObstacleShape};
 pub use task::TaskOrientation;
 pub use workspace::{Contact, Workspace};

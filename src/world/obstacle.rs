@@ -13,6 +13,34 @@ use parry3d_f64::shape::{Segment, SharedShape};
 /// to read and convert) show a spinner on stderr while they load, when stderr is a terminal.
 pub const MESH_PROGRESS_BYTES: u64 = 32 << 20;
 
+/// The shapes built from mesh files while loading one workspace, shared by every obstacle that
+/// uses the same file with the same representation and scale: a cell that places one part many
+/// times reads, converts and stores it once (parry's [`SharedShape`] is reference-counted).
+#[derive(Debug, Default)]
+pub struct MeshCache {
+    built: std::collections::HashMap<MeshKey, (SharedShape, usize)>,
+}
+
+/// What a built mesh shape depends on: the file, the representation and the scale (its bits).
+type MeshKey = (std::path::PathBuf, MeshRepresentation, [u64; 3]);
+
+impl MeshCache {
+    /// An empty cache.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Number of distinct mesh shapes built so far.
+    pub fn len(&self) -> usize {
+        self.built.len()
+    }
+
+    /// True when no mesh shape has been built.
+    pub fn is_empty(&self) -> bool {
+        self.built.is_empty()
+    }
+}
+
 /// Clears a progress display when dropped, on success and on error alike.
 struct ClearOnDrop<'a>(&'a indicatif::ProgressBar);
 
@@ -23,7 +51,9 @@ impl Drop for ClearOnDrop<'_> {
 }
 
 /// How a mesh obstacle stands in for collision checking.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, Hash, Default, serde::Serialize, serde::Deserialize,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum MeshRepresentation {
     /// The convex hull (parry `ConvexPolyhedron`): fast and conservative, fills every cavity.
@@ -163,8 +193,9 @@ impl ObstacleShape {
 
     /// The parry shape, the transform from the obstacle's frame to the shape's own frame
     /// (parry's cylinders stand along y, ours along z) and the number of mesh triangles read.
-    /// Loads mesh files; scaled mesh vertices must lie within [`MAX_LENGTH`] of the mesh origin.
-    fn parry(&self) -> Result<(SharedShape, IsometryMatrix3<f64>, usize)> {
+    /// Loads mesh files, or takes their shape from `cache` when built before; scaled mesh
+    /// vertices must lie within [`MAX_LENGTH`] of the mesh origin.
+    fn parry(&self, cache: &mut MeshCache) -> Result<(SharedShape, IsometryMatrix3<f64>, usize)> {
         let id = IsometryMatrix3::identity();
         let mut triangles = 0;
         let (shape, local) = match *self {
@@ -173,6 +204,10 @@ impl ObstacleShape {
                 representation,
                 scale,
             } => {
+                let key = (file.clone(), representation, scale.map(f64::to_bits));
+                if let Some((shape, triangles)) = cache.built.get(&key) {
+                    return Ok((shape.clone(), id, *triangles));
+                }
                 // Large meshes take a second or more to read and convert: show a spinner on
                 // stderr (drawn only when it is a terminal).
                 let bar = std::fs::metadata(file)
@@ -224,6 +259,7 @@ impl ObstacleShape {
                         SharedShape::new(mesh.to_parry_trimesh().map_err(|e| bad(e.to_string()))?)
                     }
                 };
+                cache.built.insert(key, (shape.clone(), triangles));
                 (shape, id)
             }
             ObstacleShape::Sphere { radius } => (SharedShape::ball(radius), id),
@@ -268,8 +304,19 @@ impl Obstacle {
         geometry: ObstacleShape,
         placement: IsometryMatrix3<f64>,
     ) -> Result<Self> {
+        Self::with_cache(name, geometry, placement, &mut MeshCache::new())
+    }
+
+    /// As [`Obstacle::new`], taking a mesh shape from `cache` when the same file was built
+    /// with the same representation and scale before (and adding it otherwise).
+    pub fn with_cache(
+        name: impl Into<String>,
+        geometry: ObstacleShape,
+        placement: IsometryMatrix3<f64>,
+        cache: &mut MeshCache,
+    ) -> Result<Self> {
         geometry.validate()?;
-        let (shape, local, mesh_triangles) = geometry.parry()?;
+        let (shape, local, mesh_triangles) = geometry.parry(cache)?;
         let sphere = match geometry {
             ObstacleShape::Sphere { radius } => {
                 Some((Point3::from(placement.translation.vector), radius))

@@ -357,24 +357,36 @@ pub fn load_reach(path: &Path, tasks: &[nalgebra::Point3<f64>], dof: usize) -> R
 /// The page data of `input` (what the page's script reads), as JSON.
 pub fn view_data(input: &ViewInput) -> Value {
     let ws = input.workspace;
+    // Obstacles that share one shape (a mesh placed many times, read once: see
+    // `world::MeshCache`) carry its triangles once; the others name the first (`same_as`).
+    let mut first_of: Vec<(*const (), usize)> = Vec::new();
     let obstacles: Vec<Value> = ws
         .obstacles
         .iter()
-        .map(|o| {
-            let mut mesh = Mesh::default();
-            let drawn = add_shape(&mut mesh, &Pose::IDENTITY, o.shape().as_ref());
+        .enumerate()
+        .map(|(k, o)| {
             let representation = match &o.geometry {
                 crate::world::obstacle::ObstacleShape::Mesh { representation, .. } => {
                     representation.name()
                 }
                 g => g.kind(),
             };
-            let mut v = mesh.to_json();
+            let ptr = std::sync::Arc::as_ptr(&o.shape().0) as *const ();
+            let mut v = match first_of.iter().find(|(p, _)| *p == ptr) {
+                Some(&(_, first)) => json!({ "same_as": first }),
+                None => {
+                    first_of.push((ptr, k));
+                    let mut mesh = Mesh::default();
+                    let drawn = add_shape(&mut mesh, &Pose::IDENTITY, o.shape().as_ref());
+                    let mut v = mesh.to_json();
+                    v["exact"] = drawn.into();
+                    v
+                }
+            };
             v["name"] = o.name.clone().into();
             v["kind"] = o.geometry.kind().into();
             v["representation"] = representation.into();
             v["pose"] = pose7(o.pose()).to_vec().into();
-            v["exact"] = drawn.into();
             v
         })
         .collect();
