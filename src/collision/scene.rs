@@ -49,15 +49,41 @@ enum Exact {
 #[derive(Clone, Debug)]
 struct Part {
     pose: Pose,
-    hull: ClimbingHull,
+    hull: Arc<ClimbingHull>,
     center: Point3<f64>,
     radius: f64,
 }
 
+/// The vertex graphs ([`ClimbingHull`]) of a convex hull (one) or of a decomposition's parts,
+/// by the address of the shape they were built for: obstacles that share a shape (a mesh
+/// placed many times, [`crate::world::MeshCache`]) share them; `None` when a part is not a
+/// convex polyhedron. The addresses are unique while the scene is built: every shape is held
+/// by an obstacle until then.
+type Climbers = std::collections::HashMap<usize, Option<Arc<[Arc<ClimbingHull>]>>>;
+
+/// The vertex graphs of `shape`'s convex hull or parts, from `climbers` when built before.
+fn climbers(shape: &SharedShape, climbers: &mut Climbers) -> Option<Arc<[Arc<ClimbingHull>]>> {
+    let key = Arc::as_ptr(&shape.0) as *const () as usize;
+    climbers
+        .entry(key)
+        .or_insert_with(|| {
+            if let Some(poly) = shape.as_convex_polyhedron() {
+                return Some(Arc::from([Arc::new(ClimbingHull::new(poly)?)]));
+            }
+            shape
+                .as_compound()?
+                .shapes()
+                .iter()
+                .map(|(_, part)| Some(Arc::new(ClimbingHull::new(part.as_convex_polyhedron()?)?)))
+                .collect::<Option<Arc<[_]>>>()
+        })
+        .clone()
+}
+
 /// The fast path of a shape: a box ([`Exact::Cuboid`]), a triangle mesh ([`Exact::Mesh`]), a
 /// convex hull or convex parts ([`Exact::Hull`], [`Exact::Parts`]); `None` otherwise, or when a
-/// part is not a convex polyhedron.
-fn fast_path(shape: &SharedShape, pose: &Pose) -> Option<Exact> {
+/// part is not a convex polyhedron. The hulls' vertex graphs come from `cache`.
+fn fast_path(shape: &SharedShape, pose: &Pose, cache: &mut Climbers) -> Option<Exact> {
     if let Some(c) = shape.as_cuboid() {
         let h = c.half_extents;
         return Some(Exact::Cuboid {
@@ -68,27 +94,29 @@ fn fast_path(shape: &SharedShape, pose: &Pose) -> Option<Exact> {
     if shape.as_trimesh().is_some() {
         return Some(Exact::Mesh { pose: *pose });
     }
-    if let Some(poly) = shape.as_convex_polyhedron() {
+    if shape.as_convex_polyhedron().is_some() {
         return Some(Exact::Hull {
             pose: *pose,
-            hull: Arc::new(ClimbingHull::new(poly)?),
+            hull: climbers(shape, cache)?[0].clone(),
         });
     }
     let compound = shape.as_compound()?;
-    let parts = compound
+    let hulls = climbers(shape, cache)?;
+    let parts: Vec<Part> = compound
         .shapes()
         .iter()
-        .map(|(local, part)| {
+        .zip(hulls.iter())
+        .map(|((local, part), hull)| {
             let world = *pose * *local;
             let bs = part.compute_bounding_sphere(&world);
-            Some(Part {
+            Part {
                 pose: world,
-                hull: ClimbingHull::new(part.as_convex_polyhedron()?)?,
+                hull: hull.clone(),
                 center: from_parry_point(bs.center()),
                 radius: bs.radius(),
-            })
+            }
         })
-        .collect::<Option<Vec<_>>>()?;
+        .collect();
     Some(Exact::Parts(parts.into()))
 }
 
@@ -426,6 +454,7 @@ impl CollisionScene {
             .map(|o| o.shape().compute_aabb(o.pose()))
             .collect();
         let bvh = Bvh::from_leaves(BvhBuildStrategy::Binned, &boxes);
+        let mut cache = Climbers::new();
         for o in &obstacles {
             let bs = o.shape().compute_bounding_sphere(o.pose());
             bounds.push((from_parry_point(bs.center()), bs.radius()));
@@ -442,7 +471,7 @@ impl CollisionScene {
                         radius,
                     }
                 }
-                _ => fast_path(o.shape(), o.pose()).unwrap_or(Exact::General),
+                _ => fast_path(o.shape(), o.pose(), &mut cache).unwrap_or(Exact::General),
             });
         }
         let linear = obstacles.len() <= LINEAR_SCAN
@@ -1065,5 +1094,66 @@ mod tests {
         assert!(matches!(s.exact[0], Exact::Hull { .. }));
         assert!(matches!(&s.exact[1], Exact::Parts(p) if p.len() == 9));
         assert!(matches!(s.exact[2], Exact::Cuboid { .. }));
+    }
+
+    /// Obstacles that share a mesh shape (a mesh placed many times) share its vertex graphs,
+    /// each at its own pose, and their distances are those of obstacles built one by one.
+    #[test]
+    fn placed_copies_share_their_hulls() {
+        use rand::{RngExt, SeedableRng};
+        let pipework = &scenes()[1];
+        let mut cache = crate::world::MeshCache::new();
+        let (mut shared, mut alone) = (Vec::new(), Vec::new());
+        for k in 0..3 {
+            // The vessel hull and the pipe-bundle decomposition, moved along y.
+            for o in &pipework.obstacles[..2] {
+                let t = nalgebra::Translation3::new(0.0, 1.5 * k as f64, 0.0);
+                let placement =
+                    nalgebra::IsometryMatrix3::from_parts(t, Default::default()) * o.placement;
+                let name = format!("{} {k}", o.name);
+                let geometry = o.geometry.clone();
+                shared.push(Obstacle::with_cache(
+                    &name,
+                    geometry.clone(),
+                    placement,
+                    &mut cache,
+                ));
+                alone.push(Obstacle::new(&name, geometry, placement));
+            }
+        }
+        let shared: Vec<Obstacle> = shared.into_iter().map(Result::unwrap).collect();
+        let alone: Vec<Obstacle> = alone.into_iter().map(Result::unwrap).collect();
+        assert_eq!(cache.len(), 2);
+        let tasks = vec![Point3::new(0.0, 0.0, 3.0)];
+        let a = CollisionScene::new(&Workspace::new(shared, tasks.clone(), 0.01).unwrap());
+        let b = CollisionScene::new(&Workspace::new(alone, tasks, 0.01).unwrap());
+        let hulls = |s: &CollisionScene, k: usize| match &s.exact[k] {
+            Exact::Hull { hull, .. } => vec![Arc::as_ptr(hull)],
+            Exact::Parts(parts) => parts.iter().map(|p| Arc::as_ptr(&p.hull)).collect(),
+            e => panic!("{e:?}"),
+        };
+        assert_eq!(hulls(&a, 1).len(), 9);
+        for k in 2..6 {
+            assert_eq!(hulls(&a, k), hulls(&a, k % 2), "copy {k} shares");
+            assert_ne!(hulls(&b, k), hulls(&b, k % 2), "copy {k} built alone");
+        }
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let mut point = || {
+            Point3::new(
+                rng.random_range(-1.0..1.5),
+                rng.random_range(-1.5..4.5),
+                rng.random_range(-0.2..1.5),
+            )
+        };
+        let mut near = 0;
+        for _ in 0..3000 {
+            let (p, q) = (point(), point());
+            for k in 0..6 {
+                let d = a.distance(k, &p, &q, 0.03);
+                assert_eq!(d, b.distance(k, &p, &q, 0.03), "obstacle {k}, {p} – {q}");
+                near += usize::from(d < 0.2);
+            }
+        }
+        assert!(near > 100, "the segments come near the copies ({near})");
     }
 }
