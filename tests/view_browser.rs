@@ -495,3 +495,67 @@ fn a_mesh_placed_many_times_is_written_once() {
     // triangles (the bundle's alone are tens of kilobytes).
     assert!(bytes[1] < bytes[0] + 200 * 300, "{bytes:?}");
 }
+
+/// Primitives travel by their dimensions and are drawn instanced: 2,000 spheres of random radii
+/// and 50 each of capsules, cylinders and boxes cost about 200 bytes of page each, and the page
+/// draws every one of them with the triangles of its kind.
+#[test]
+fn many_primitives_travel_by_their_dimensions() {
+    use rand::{RngExt, SeedableRng};
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(manifest("examples/scenarios/paper-3d.toml")).unwrap();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+    let mut extra = String::new();
+    let mut kinds = Vec::new();
+    for k in 0..2150 {
+        let (x, y, z) = (
+            rng.random_range(3.0..6.0),
+            rng.random_range(-3.0..3.0),
+            rng.random_range(-3.0..3.0),
+        );
+        let r: f64 = rng.random_range(0.02..0.06);
+        let (kind, dims) = match k {
+            0..2000 => ("sphere", format!("radius = {r}")),
+            2000..2050 => ("capsule", format!("radius = {r}\nlength = {}", 3.0 * r)),
+            2050..2100 => ("cylinder", format!("radius = {r}\nlength = {}", 2.0 * r)),
+            _ => ("cuboid", format!("size = [{r}, {}, {}]", 2.0 * r, 3.0 * r)),
+        };
+        kinds.push(kind);
+        extra += &format!(
+            "[[obstacle]]\nshape = \"{kind}\"\nposition = [{x}, {y}, {z}]\nrpy = [0.3, 0.2, 0.1]\n{dims}\n\n"
+        );
+    }
+    let base_count = Scenario::load(&manifest("examples/scenarios/paper-3d.toml"))
+        .unwrap()
+        .workspace
+        .obstacles
+        .len();
+    let many = text.replacen("[[task]]", &format!("{extra}[[task]]"), 1);
+    let mut bytes = Vec::new();
+    for (name, text) in [("base", &text), ("many", &many)] {
+        let file = dir.path().join(format!("{name}.toml"));
+        std::fs::write(&file, text).unwrap();
+        let page = dir.path().join(format!("{name}.html"));
+        run(&[
+            "view".as_ref(),
+            file.as_os_str(),
+            "-o".as_ref(),
+            page.as_os_str(),
+        ]);
+        bytes.push(std::fs::metadata(&page).unwrap().len());
+        if name == "many" {
+            let result = selftest(&page);
+            let errors = result["errors"].as_array().unwrap();
+            assert!(errors.is_empty(), "console errors: {errors:?}");
+            assert_eq!(result["view"]["ready"], true);
+            let obstacles = result["view"]["obstacles"].as_array().unwrap();
+            assert_eq!(obstacles.len(), base_count + kinds.len());
+            for (o, kind) in obstacles[base_count..].iter().zip(&kinds) {
+                assert_eq!(o["kind"], *kind, "{o}");
+                assert!(o["triangles"].as_u64().unwrap() >= 12, "{o}");
+            }
+            assert!(result["canvas"]["nonBackground"].as_f64().unwrap() > 0.02);
+        }
+    }
+    assert!(bytes[1] < bytes[0] + 2150 * 250, "{bytes:?}");
+}

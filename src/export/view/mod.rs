@@ -3,8 +3,11 @@
 //! into the binary), with the design, the run's convergence, its Eq. 23 cost breakdown and its
 //! settings beside the view.
 //!
-//! Geometry is drawn as the checker sees it: every obstacle's parry shape (hull, convex
-//! decomposition, triangle mesh or primitive) turned into triangles, and the robot's bodies from
+//! Geometry is drawn as the checker sees it: every mesh obstacle's parry shape (hull, convex
+//! decomposition or triangle mesh) turned into triangles, written once per shape however many
+//! obstacles share it; primitives (spheres, capsules, boxes, cylinders) by their dimensions,
+//! which the page tessellates itself (a cell of 100,000 spheres stays a page of megabytes, not
+//! gigabytes); and the robot's bodies from
 //! the one body model ([`RobotBody`]: capsule segments and solids). The page does no kinematics:
 //! every animation sample carries the poses the chain's own forward kinematics gives there, the
 //! same as the checker's, sampled along the straight actuation-space edges of each path.
@@ -371,8 +374,21 @@ pub fn view_data(input: &ViewInput) -> Value {
                 }
                 g => g.kind(),
             };
+            use crate::world::ObstacleShape as S;
+            let primitive = match o.geometry {
+                S::Sphere { radius } => Some(json!({ "shape": "sphere", "radius": radius })),
+                S::Capsule { length, radius } => {
+                    Some(json!({ "shape": "capsule", "radius": radius, "length": length }))
+                }
+                S::Cylinder { length, radius } => {
+                    Some(json!({ "shape": "cylinder", "radius": radius, "length": length }))
+                }
+                S::Cuboid { size } => Some(json!({ "shape": "cuboid", "size": size })),
+                S::Mesh { .. } => None,
+            };
             let ptr = std::sync::Arc::as_ptr(&o.shape().0) as *const ();
             let mut v = match first_of.iter().find(|(p, _)| *p == ptr) {
+                _ if primitive.is_some() => json!({ "primitive": primitive, "exact": true }),
                 Some(&(_, first)) => json!({ "same_as": first }),
                 None => {
                     first_of.push((ptr, k));
@@ -386,7 +402,13 @@ pub fn view_data(input: &ViewInput) -> Value {
             v["name"] = o.name.clone().into();
             v["kind"] = o.geometry.kind().into();
             v["representation"] = representation.into();
-            v["pose"] = pose7(o.pose()).to_vec().into();
+            // Each value as its shortest `f32` decimal: the page reads `f32` (and a cell of
+            // many obstacles pays for every digit).
+            let pose: Vec<f64> = pose7(o.pose())
+                .iter()
+                .map(|x| x.to_string().parse().unwrap_or(0.0))
+                .collect();
+            v["pose"] = pose.into();
             v
         })
         .collect();
