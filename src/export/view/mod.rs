@@ -38,6 +38,9 @@ const PAGE: &str = include_str!("page.html");
 
 /// Most animation samples along one path (the path's own points are always among them).
 pub const MAX_SAMPLES_PER_PATH: usize = 400;
+/// Most animation samples over all paths of a page (a report of thousands of reached tasks gets
+/// fewer samples per path, down to its points alone).
+pub const MAX_SAMPLES_TOTAL: usize = 20_000;
 /// Samples per straight edge of a path before the per-path cap applies.
 pub const SAMPLES_PER_EDGE: usize = 8;
 /// Subdivisions of round primitives (balls, capsules, cylinders) around their axis.
@@ -206,11 +209,11 @@ fn push_sample(
 }
 
 /// The configurations shown along a path: its points, and between each two of them samples
-/// on the straight actuation-space edge the planner checked, at most
-/// [`MAX_SAMPLES_PER_PATH`] in all, spread by edge length.
-fn path_configurations(points: &[Vec<f64>]) -> Vec<Vec<f64>> {
+/// on the straight actuation-space edge the planner checked, at most `cap` in all (or the
+/// points alone when they are more), spread by edge length.
+fn path_configurations(points: &[Vec<f64>], cap: usize) -> Vec<Vec<f64>> {
     let edges = points.len().saturating_sub(1);
-    if edges == 0 {
+    if edges == 0 || cap <= points.len() {
         return points.to_vec();
     }
     let lengths: Vec<f64> = points
@@ -224,7 +227,7 @@ fn path_configurations(points: &[Vec<f64>]) -> Vec<Vec<f64>> {
         })
         .collect();
     let total: f64 = lengths.iter().sum();
-    let budget = (SAMPLES_PER_EDGE * edges).min(MAX_SAMPLES_PER_PATH.max(edges + 1) - 1);
+    let budget = (SAMPLES_PER_EDGE * edges).min(cap - 1);
     let mut out = vec![points[0].clone()];
     for (k, w) in points.windows(2).enumerate() {
         let steps = if total > 0.0 {
@@ -489,6 +492,8 @@ pub fn view_data(input: &ViewInput) -> Value {
         .collect();
     let mut paths = Vec::new();
     if let Some(report) = input.report {
+        let reached = report.targets.iter().filter(|t| t.reached).count().max(1);
+        let cap = (MAX_SAMPLES_TOTAL / reached).min(MAX_SAMPLES_PER_PATH);
         for t in &report.targets {
             let Some(path) = t.path.as_ref().filter(|_| t.reached) else {
                 continue;
@@ -496,7 +501,7 @@ pub fn view_data(input: &ViewInput) -> Value {
             if path.points.iter().any(|p| p.len() != chain.dof()) {
                 continue;
             }
-            let configs = path_configurations(&path.points);
+            let configs = path_configurations(&path.points, cap);
             let mut data = Vec::with_capacity(configs.len() * sample_stride(chain, body));
             for a in &configs {
                 push_sample(chain, body, a, &mut frames, &mut placed, &mut data);
@@ -658,19 +663,27 @@ mod tests {
     #[test]
     fn path_configurations_keep_the_points_and_respect_the_cap() {
         let points = vec![vec![0.0, 0.0], vec![1.0, 0.0], vec![1.0, 3.0]];
-        let c = path_configurations(&points);
+        let c = path_configurations(&points, MAX_SAMPLES_PER_PATH);
         assert_eq!(c.first(), points.first());
         assert_eq!(c.last(), points.last());
         assert!(c.contains(&points[1]));
         assert_eq!(c.len(), 1 + 2 * SAMPLES_PER_EDGE);
         let long: Vec<Vec<f64>> = (0..1000).map(|i| vec![i as f64]).collect();
-        let c = path_configurations(&long);
+        let c = path_configurations(&long, MAX_SAMPLES_PER_PATH);
         assert_eq!(
             c.len(),
             1000,
             "every point, nothing between, when over the cap"
         );
-        assert_eq!(path_configurations(&[vec![1.0]]), vec![vec![1.0]]);
+        assert_eq!(
+            path_configurations(&[vec![1.0]], MAX_SAMPLES_PER_PATH),
+            vec![vec![1.0]]
+        );
+        // A smaller cap (many paths on one page) keeps the points and fewer samples.
+        let c = path_configurations(&points, 5);
+        assert_eq!(c.len(), 5);
+        assert!(c.contains(&points[1]) && c.last() == points.last());
+        assert_eq!(path_configurations(&points, 1), points);
     }
 
     #[test]
