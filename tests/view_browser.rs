@@ -458,42 +458,28 @@ fn a_mesh_placed_many_times_is_written_once() {
         );
     }
     let many = one.replacen("[[task]]", &format!("{extra}\n[[task]]"), 1);
-    let mut bytes = Vec::new();
-    for (name, text) in [("one", &one), ("many", &many)] {
-        let file = dir.path().join(format!("{name}.toml"));
-        std::fs::write(&file, text).unwrap();
-        let page = dir.path().join(format!("{name}.html"));
-        run(&[
-            "view".as_ref(),
-            file.as_os_str(),
-            "-o".as_ref(),
-            page.as_os_str(),
-        ]);
-        bytes.push(std::fs::metadata(&page).unwrap().len());
-        if name == "many" {
-            let result = selftest(&page);
-            let errors = result["errors"].as_array().unwrap();
-            assert!(errors.is_empty(), "console errors: {errors:?}");
-            let obstacles = result["view"]["obstacles"].as_array().unwrap();
-            assert_eq!(obstacles.len(), 203);
-            let first = obstacles
-                .iter()
-                .find(|o| o["name"] == "pipe bundle")
-                .unwrap();
-            assert!(first["triangles"].as_u64().unwrap() > 100, "{first}");
-            for o in obstacles
-                .iter()
-                .filter(|o| o["name"] != "vessel" && o["name"] != "floor")
-            {
-                assert_eq!(o["triangles"], first["triangles"], "{o}");
-                assert_eq!(o["representation"], "decomposition", "{o}");
-            }
-            assert!(result["canvas"]["nonBackground"].as_f64().unwrap() > 0.02);
-        }
+    let (one_bytes, many_bytes, result) = base_and_many(dir.path(), &one, &many);
+    let obstacles = result["view"]["obstacles"].as_array().unwrap();
+    assert_eq!(obstacles.len(), 203);
+    let first = obstacles
+        .iter()
+        .find(|o| o["name"] == "pipe bundle")
+        .unwrap();
+    assert!(first["triangles"].as_u64().unwrap() > 100, "{first}");
+    for o in obstacles
+        .iter()
+        .filter(|o| o["name"] != "vessel" && o["name"] != "floor")
+    {
+        assert_eq!(o["triangles"], first["triangles"], "{o}");
+        assert_eq!(o["representation"], "decomposition", "{o}");
     }
+    assert!(result["canvas"]["nonBackground"].as_f64().unwrap() > 0.02);
     // 200 more obstacles cost their names and poses (about 200 bytes each), not their
     // triangles (the bundle's alone are tens of kilobytes).
-    assert!(bytes[1] < bytes[0] + 200 * 300, "{bytes:?}");
+    assert!(
+        many_bytes < one_bytes + 200 * 300,
+        "{one_bytes} -> {many_bytes} bytes"
+    );
 }
 
 /// Primitives travel by their dimensions and are drawn instanced: 2,000 spheres of random radii
@@ -531,11 +517,30 @@ fn many_primitives_travel_by_their_dimensions() {
         .obstacles
         .len();
     let many = text.replacen("[[task]]", &format!("{extra}[[task]]"), 1);
+    let (base_bytes, many_bytes, result) = base_and_many(dir.path(), &text, &many);
+    assert_eq!(result["view"]["ready"], true);
+    let obstacles = result["view"]["obstacles"].as_array().unwrap();
+    assert_eq!(obstacles.len(), base_count + kinds.len());
+    for (o, kind) in obstacles[base_count..].iter().zip(&kinds) {
+        assert_eq!(o["kind"], *kind, "{o}");
+        assert!(o["triangles"].as_u64().unwrap() >= 12, "{o}");
+    }
+    assert!(result["canvas"]["nonBackground"].as_f64().unwrap() > 0.02);
+    assert!(
+        many_bytes < base_bytes + 2150 * 250,
+        "{base_bytes} -> {many_bytes} bytes"
+    );
+}
+
+/// Writes the pages of `base` and `many` (scenario texts) with `kinsynth view` into `dir`, and
+/// returns their sizes in bytes and the self-test result of the second (checked for console
+/// errors).
+fn base_and_many(dir: &Path, base: &str, many: &str) -> (u64, u64, serde_json::Value) {
     let mut bytes = Vec::new();
-    for (name, text) in [("base", &text), ("many", &many)] {
-        let file = dir.path().join(format!("{name}.toml"));
+    for (name, text) in [("base", base), ("many", many)] {
+        let file = dir.join(format!("{name}.toml"));
         std::fs::write(&file, text).unwrap();
-        let page = dir.path().join(format!("{name}.html"));
+        let page = dir.join(format!("{name}.html"));
         run(&[
             "view".as_ref(),
             file.as_os_str(),
@@ -543,19 +548,9 @@ fn many_primitives_travel_by_their_dimensions() {
             page.as_os_str(),
         ]);
         bytes.push(std::fs::metadata(&page).unwrap().len());
-        if name == "many" {
-            let result = selftest(&page);
-            let errors = result["errors"].as_array().unwrap();
-            assert!(errors.is_empty(), "console errors: {errors:?}");
-            assert_eq!(result["view"]["ready"], true);
-            let obstacles = result["view"]["obstacles"].as_array().unwrap();
-            assert_eq!(obstacles.len(), base_count + kinds.len());
-            for (o, kind) in obstacles[base_count..].iter().zip(&kinds) {
-                assert_eq!(o["kind"], *kind, "{o}");
-                assert!(o["triangles"].as_u64().unwrap() >= 12, "{o}");
-            }
-            assert!(result["canvas"]["nonBackground"].as_f64().unwrap() > 0.02);
-        }
     }
-    assert!(bytes[1] < bytes[0] + 2150 * 250, "{bytes:?}");
+    let result = selftest(&dir.join("many.html"));
+    let errors = result["errors"].as_array().unwrap();
+    assert!(errors.is_empty(), "console errors: {errors:?}");
+    (bytes[0], bytes[1], result)
 }
