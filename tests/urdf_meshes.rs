@@ -726,3 +726,32 @@ fn forward_kinematics_of_the_first_links_places_their_bodies_as_the_full_one() {
     }
     assert!(solids_seen > 0, "the imported arms carry solids");
 }
+
+/// A mesh or box element repeated exactly adds no body: 300 copies each of link 1's mesh and of
+/// the gripper box import as the arm itself, with the same self pairs; a copy at another origin
+/// is another body.
+#[test]
+fn repeated_collision_elements_add_no_body() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = r#"<collision><geometry><mesh filename="../../meshes/arm/link1.stl" scale="1 1 1"/></geometry></collision>"#;
+    let gripper = r#"<collision name="gripper"><origin xyz="0 0 0.08" rpy="0 0 0"/><geometry><box size="0.06 0.02 0.08"/></geometry></collision>"#;
+    let text = std::fs::read_to_string(arm_urdf()).unwrap();
+    assert!(text.contains(mesh) && text.contains(gripper));
+    let abs = format!("{}/meshes/", root().display());
+    let write = |name: &str, text: String| {
+        let p = dir.path().join(name);
+        std::fs::write(&p, text.replace("../../meshes/", &abs)).unwrap();
+        p
+    };
+    let base = import(&write("base.urdf", text.clone()), &ImportOptions::default());
+    let many = text
+        .replace(mesh, &mesh.repeat(300))
+        .replace(gripper, &gripper.repeat(300));
+    let many = import(&write("many.urdf", many), &ImportOptions::default());
+    assert_eq!(many.body.len(), base.body.len());
+    assert_eq!(many.body.self_pairs(), base.body.self_pairs());
+    let moved = mesh.replace("<geometry>", r#"<origin xyz="0 0 0.001"/><geometry>"#);
+    let shifted = text.replace(mesh, &format!("{mesh}{moved}"));
+    let shifted = import(&write("shifted.urdf", shifted), &ImportOptions::default());
+    assert_eq!(shifted.body.len(), base.body.len() + 1);
+}
