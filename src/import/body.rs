@@ -608,21 +608,26 @@ pub fn read_srdf(path: &Path, robot: &urdf_rs::Robot, urdf: &Path) -> Result<Vec
     let doc =
         roxmltree::Document::parse(&text).map_err(|e| parse(format!("not a valid SRDF: {e}")))?;
     let mut out = Vec::new();
+    let links: std::collections::HashSet<&str> =
+        robot.links.iter().map(|l| l.name.as_str()).collect();
     for n in doc
         .descendants()
         .filter(|n| n.has_tag_name("disable_collisions"))
     {
-        let line = doc.text_pos_at(n.range().start).row;
+        // Found only for a message: finding it scans the text from its start.
+        let line = || doc.text_pos_at(n.range().start).row;
         let mut names = [String::new(), String::new()];
         for (k, attr) in ["link1", "link2"].into_iter().enumerate() {
             let Some(v) = n.attribute(attr) else {
                 return Err(parse(format!(
-                    "line {line}: <disable_collisions> has no {attr} attribute"
+                    "line {}: <disable_collisions> has no {attr} attribute",
+                    line()
                 )));
             };
-            if !robot.links.iter().any(|l| l.name == v) {
+            if !links.contains(v) {
                 return Err(parse(format!(
-                    "line {line}: <disable_collisions {attr}=\"{v}\">: the URDF {} has no link '{v}'",
+                    "line {}: <disable_collisions {attr}=\"{v}\">: the URDF {} has no link '{v}'",
+                    line(),
                     urdf.display()
                 )));
             }

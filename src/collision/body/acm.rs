@@ -305,20 +305,107 @@ impl AllowedCollisions {
     }
 
     /// Disables every pair of frames named in `extra` (for example from an SRDF), with its
-    /// reason, and drops the body pairs between them from the checked list.
+    /// reason, and drops the body pairs between them from the checked list. A pair already
+    /// disabled (in either order) keeps its first reason. Linear in the pairs: an SRDF may
+    /// list hundreds of thousands.
     pub fn disable(&mut self, body: &RobotBody, extra: &[DisabledPair]) {
+        use std::collections::HashSet;
+        fn key<'a>(a: &'a str, b: &'a str) -> (&'a str, &'a str) {
+            if a <= b {
+                (a, b)
+            } else {
+                (b, a)
+            }
+        }
+        let mut known: HashSet<(String, String)> = self
+            .disabled
+            .iter()
+            .map(|e| {
+                let (a, b) = key(&e.link1, &e.link2);
+                (a.to_string(), b.to_string())
+            })
+            .collect();
+        let mut off: HashSet<(&str, &str)> = HashSet::with_capacity(extra.len());
         for d in extra {
-            let known = self.disabled.iter().any(|e| {
-                (e.link1 == d.link1 && e.link2 == d.link2)
-                    || (e.link1 == d.link2 && e.link2 == d.link1)
-            });
-            if !known {
+            let (a, b) = key(&d.link1, &d.link2);
+            off.insert((a, b));
+            if !known.contains(&(a.to_string(), b.to_string())) {
+                known.insert((a.to_string(), b.to_string()));
                 self.disabled.push(d.clone());
             }
-            self.pairs.retain(|&(p, q)| {
-                let (a, b) = (body.frame(p as usize), body.frame(q as usize));
-                !((a == d.link1 && b == d.link2) || (a == d.link2 && b == d.link1))
-            });
         }
+        self.pairs.retain(|&(p, q)| {
+            let k = key(body.frame(p as usize), body.frame(q as usize));
+            !off.contains(&k)
+        });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scenario::preset::{generate, Preset};
+    use crate::Scenario;
+
+    /// Disabling pairs from a list (an SRDF's) drops exactly the body pairs between the named
+    /// frames, in either order, adds each frame pair once with its first reason, and a list
+    /// that repeats its pairs thousands of times gives the same matrix as the list once.
+    #[test]
+    fn disabling_pairs_drops_them_once_whatever_the_repeats() {
+        let s = Scenario::from_spec(&generate(Preset::Paper3d, 2)).unwrap();
+        let chain = s.space.largest().chain();
+        let body = RobotBody::of_chain(&chain);
+        let acm = body.acm().clone();
+        let &(p, q) = acm.pairs().last().unwrap();
+        let (a, b) = (body.frame(p as usize), body.frame(q as usize));
+        let &(p2, q2) = acm.pairs().first().unwrap();
+        let (c, d) = (body.frame(p2 as usize), body.frame(q2 as usize));
+        assert!((a, b) != (c, d));
+        let pair = |l1: &str, l2: &str, reason| DisabledPair {
+            link1: l1.to_string(),
+            link2: l2.to_string(),
+            reason,
+        };
+        let once = vec![pair(b, a, Reason::User), pair(c, d, Reason::Default)];
+        let mut repeated = Vec::new();
+        for _ in 0..5000 {
+            repeated.push(pair(a, b, Reason::Always));
+            repeated.extend(once.iter().cloned());
+        }
+        let mut x = acm.clone();
+        x.disable(&body, &once);
+        let mut y = acm.clone();
+        y.disable(&body, &repeated);
+        assert_eq!(x.pairs(), y.pairs());
+        assert_eq!(x.disabled().len(), acm.disabled().len() + 2);
+        assert_eq!(y.disabled().len(), acm.disabled().len() + 2);
+        let reason = |m: &AllowedCollisions| {
+            let e = m
+                .disabled()
+                .iter()
+                .find(|e| (e.link1 == a && e.link2 == b) || (e.link1 == b && e.link2 == a));
+            e.unwrap().reason
+        };
+        // The first mention of a frame pair gives its reason.
+        assert_eq!(reason(&x), Reason::User);
+        assert_eq!(reason(&y), Reason::Always);
+        let between = |m: &AllowedCollisions, f: &str, g: &str| {
+            m.pairs().iter().any(|&(p, q)| {
+                let (p, q) = (body.frame(p as usize), body.frame(q as usize));
+                (p, q) == (f, g) || (p, q) == (g, f)
+            })
+        };
+        assert!(between(&acm, a, b) && between(&acm, c, d));
+        assert!(!between(&y, a, b) && !between(&y, c, d));
+        let kept: Vec<_> = acm
+            .pairs()
+            .iter()
+            .filter(|&&(p, q)| {
+                let k = (body.frame(p as usize), body.frame(q as usize));
+                ![(a, b), (b, a), (c, d), (d, c)].contains(&k)
+            })
+            .copied()
+            .collect();
+        assert_eq!(y.pairs(), &kept[..]);
     }
 }
