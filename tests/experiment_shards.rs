@@ -33,6 +33,23 @@ fn without_times(runs_csv: &str) -> Vec<String> {
         .collect()
 }
 
+/// An experiment runs at least one workspace and at most 100,000 (`--runs 0` printed medians
+/// of nothing).
+#[test]
+fn runs_must_be_from_1_to_the_limit() {
+    for (runs, ok) in [(0, false), (1, true), (100_000, true), (100_001, false)] {
+        let r = ExperimentSpec { runs, ..spec() }.validate();
+        assert_eq!(r.is_ok(), ok, "{runs}: {r:?}");
+        if let Err(e) = r {
+            let e = e.to_string();
+            assert!(
+                e.contains(&format!("--runs = {runs}")) && e.contains("from 1 to 100000"),
+                "{e}"
+            );
+        }
+    }
+}
+
 #[test]
 fn shards_parse_and_cover_every_workspace_once() {
     assert_eq!(

@@ -316,11 +316,11 @@ impl ExperimentSpec {
                 "must be at least 1",
             ));
         }
-        if self.runs > MAX_SHARDS {
+        if !(1..=MAX_SHARDS).contains(&self.runs) {
             return Err(crate::Error::invalid(
                 "--runs",
                 self.runs,
-                format!("must be at most {MAX_SHARDS}"),
+                format!("must be from 1 to {MAX_SHARDS}"),
             ));
         }
         Ok(())
