@@ -293,10 +293,18 @@ impl Scenario {
             r.self_collision_samples,
             "must be at most 1000000",
         )?;
+        // Each pair once, in either order: the matrix is rebuilt for every design evaluated.
+        let mut allowed: Vec<[usize; 2]> = r
+            .allowed_collisions
+            .iter()
+            .map(|&[a, b]| [a.min(b), a.max(b)])
+            .collect();
+        allowed.sort_unstable();
+        allowed.dedup();
         let mut planner = spec.planner.clone();
         planner.self_collision = crate::collision::SelfCollisionConfig {
             enabled: r.self_collision,
-            allowed: r.allowed_collisions.clone(),
+            allowed,
             samples: r.self_collision_samples,
             seed: spec.seed,
         };
@@ -910,5 +918,20 @@ point = [0.5, 0.0, 0.2]
         // from the distance at that point to the first copy.
         let p = Point3::from(copies[3].placement.translation.vector);
         assert!(copies[0].signed_distance_to_point(&p) > copies[3].signed_distance_to_point(&p));
+    }
+
+    /// `allowed_collisions` reaches the planner once per pair, in either order: a list that
+    /// repeats a pair a million times costs every evaluated design nothing more.
+    #[test]
+    fn allowed_collisions_are_kept_once_per_pair() {
+        let pairs = "[2, 1], [1, 2], [1, 2], [0, 2], [2, 0], [1, 2]";
+        let text = MINIMAL.replacen(
+            "[robot]\n",
+            &format!("[robot]\nallowed_collisions = [{pairs}]\n"),
+            1,
+        );
+        assert_ne!(text, MINIMAL);
+        let s = Scenario::from_spec(&Scenario::parse(&text).unwrap()).unwrap();
+        assert_eq!(s.planner.self_collision.allowed, vec![[0, 2], [1, 2]]);
     }
 }
