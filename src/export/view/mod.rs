@@ -365,7 +365,7 @@ pub fn view_data(input: &ViewInput) -> Value {
     let ws = input.workspace;
     // Obstacles that share one shape (a mesh placed many times, read once: see
     // `world::MeshCache`) carry its triangles once; the others name the first (`same_as`).
-    let mut first_of: Vec<(*const (), usize)> = Vec::new();
+    let mut first_of: std::collections::HashMap<usize, usize> = Default::default();
     let obstacles: Vec<Value> = ws
         .obstacles
         .iter()
@@ -389,12 +389,13 @@ pub fn view_data(input: &ViewInput) -> Value {
                 S::Cuboid { size } => Some(json!({ "shape": "cuboid", "size": size })),
                 S::Mesh { .. } => None,
             };
-            let ptr = std::sync::Arc::as_ptr(&o.shape().0) as *const ();
-            let mut v = match first_of.iter().find(|(p, _)| *p == ptr) {
+            // The shapes live in `ws` throughout: their addresses are unique.
+            let ptr = std::sync::Arc::as_ptr(&o.shape().0) as *const () as usize;
+            let mut v = match first_of.get(&ptr) {
                 _ if primitive.is_some() => json!({ "primitive": primitive, "exact": true }),
-                Some(&(_, first)) => json!({ "same_as": first }),
+                Some(&first) => json!({ "same_as": first }),
                 None => {
-                    first_of.push((ptr, k));
+                    first_of.insert(ptr, k);
                     let mut mesh = Mesh::default();
                     let drawn = add_shape(&mut mesh, &Pose::IDENTITY, o.shape().as_ref());
                     let mut v = mesh.to_json();
