@@ -156,28 +156,19 @@ fn link_err(link: &str, reason: impl Into<String>) -> Error {
 /// and at most [`MAX_LENGTH`] m (a `-0` becomes `0`), every mesh scale factor finite, not zero
 /// and at most [`MAX_SETTING`] in magnitude. The error names the link, the element, the
 /// attribute and its value.
-/// What makes two `<collision>` elements the same body: the kind, its numbers (sizes, radius
-/// and length, or mesh scale), the mesh file and the origin.
-type CollisionKey = (u8, [f64; 3], Option<String>, [f64; 3], [f64; 3]);
-/// [`CollisionKey`] kinds of a box and of a mesh.
-const KEY_BOX: u8 = 0;
-const KEY_MESH: u8 = 4;
+/// What makes two box or mesh `<collision>` elements the same body: the box size or the mesh
+/// file and scale, and the origin.
+type RepeatKey = ([f64; 3], Option<String>, [f64; 3], [f64; 3]);
 
-/// The [`CollisionKey`] of a (checked) collision element.
-fn collision_key(c: &urdf_rs::Collision) -> CollisionKey {
+/// The [`RepeatKey`] of a (checked) box or mesh collision element; `None` for the others.
+fn repeat_key(c: &urdf_rs::Collision) -> Option<RepeatKey> {
     use urdf_rs::Geometry as G;
-    let (kind, numbers, file) = match &c.geometry {
-        G::Box { size } => (KEY_BOX, size.0, None),
-        G::Cylinder { radius, length } => (1, [*radius, *length, 0.0], None),
-        G::Capsule { radius, length } => (2, [*radius, *length, 0.0], None),
-        G::Sphere { radius } => (3, [*radius, 0.0, 0.0], None),
-        G::Mesh { filename, scale } => (
-            KEY_MESH,
-            scale.map_or([1.0; 3], |s| s.0),
-            Some(filename.clone()),
-        ),
+    let (numbers, file) = match &c.geometry {
+        G::Box { size } => (size.0, None),
+        G::Mesh { filename, scale } => (scale.map_or([1.0; 3], |s| s.0), Some(filename.clone())),
+        _ => return None,
     };
-    (kind, numbers, file, c.origin.xyz.0, c.origin.rpy.0)
+    Some((numbers, file, c.origin.xyz.0, c.origin.rpy.0))
 }
 
 fn checked_collision(
@@ -272,17 +263,14 @@ fn link_pieces(link: &urdf_rs::Link, pose: &IsometryMatrix3<f64>) -> Result<Vec<
     // body: only the first is kept (hundreds of copies of one mesh made every self pair
     // hundreds squared, each a GJK query). Spheres stay, even repeated: a capsule exported as a
     // cylinder and two spheres may share an end sphere's place with the next one's.
-    let mut seen: Vec<CollisionKey> = Vec::with_capacity(collision.len());
-    collision.retain(|c| {
-        let key = collision_key(c);
-        if !matches!(key.0, KEY_BOX | KEY_MESH) {
-            return true;
-        }
-        let new = !seen.contains(&key);
-        if new {
+    let mut seen: Vec<RepeatKey> = Vec::new();
+    collision.retain(|c| match repeat_key(c) {
+        Some(key) if seen.contains(&key) => false,
+        Some(key) => {
             seen.push(key);
+            true
         }
-        new
+        None => true,
     });
     let poses: Vec<IsometryMatrix3<f64>> = collision
         .iter()

@@ -329,8 +329,7 @@ impl AllowedCollisions {
         for d in extra {
             let (a, b) = key(&d.link1, &d.link2);
             off.insert((a, b));
-            if !known.contains(&(a.to_string(), b.to_string())) {
-                known.insert((a.to_string(), b.to_string()));
+            if known.insert((a.to_string(), b.to_string())) {
                 self.disabled.push(d.clone());
             }
         }
