@@ -6,9 +6,23 @@ model, then samples every edge of every path in a reach report densely and repor
 robot body against obstacle within the scenario's clearance, and every self pair the SRDF leaves
 enabled. Needs `pip install pin coal`; not used by the tests.
 
+Obstacles are placed by `position` and `rpy` (fixed axes x, y, z, as URDF) or `quaternion`
+([x, y, z, w]). Primitives become coal shapes. A mesh (`shape = "mesh"`: an STL or OBJ `file`
+relative to the scenario file, `scale` one factor or [sx, sy, sz] in the mesh's frame) is read
+by coal's MeshLoader and stands in as its `representation`:
+- `hull` (the default): the convex hull of its vertices (qhull), as kinsynth checks it;
+- `trimesh`: the triangle mesh as a bounding-volume hierarchy, as kinsynth checks it;
+- `decomposition`: also the triangle mesh (kinsynth checks V-HACD parts, which should contain
+  the surface, so a contact with the surface is a real finding).
+A triangle mesh is a surface: a body entirely inside a closed mesh is not a contact. Every path
+starts at home, outside, so such a body must have crossed the surface between two samples; the
+output says when this applies.
+
 usage: fcl_check.py ROBOT.urdf ROBOT.srdf SCENARIO.toml REACH.json [SAMPLES_PER_EDGE]
 """
+import functools
 import json
+import os
 import sys
 import tomllib
 
@@ -25,7 +39,19 @@ def rotation(o):
     return pin.rpy.rpyToMatrix(r, p, y)
 
 
-def obstacle_geometry(o):
+@functools.cache
+def mesh_geometry(path, scale, representation):
+    """A mesh file, scaled, as its convex hull or its triangles (a BVH); read once per key."""
+    bvh = coal.MeshLoader().load(path, np.array(scale))
+    if representation == "hull":
+        bvh.buildConvexHull(True, "Qt")
+        return bvh.convex
+    if representation in ("trimesh", "decomposition"):
+        return bvh
+    raise ValueError(f"{path}: unknown mesh representation {representation!r}")
+
+
+def obstacle_geometry(o, scenario_dir):
     shape = o["shape"]
     if shape == "sphere":
         return coal.Sphere(o["radius"])
@@ -35,7 +61,11 @@ def obstacle_geometry(o):
         return coal.Cylinder(o["radius"], o["length"])
     if shape == "cuboid":
         return coal.Box(*o["size"])
-    return None  # meshes: not handled by this script
+    if shape == "mesh":
+        scale = tuple(float(v) for v in np.broadcast_to(o.get("scale", 1.0), 3))
+        path = os.path.join(scenario_dir, o["file"])
+        return mesh_geometry(path, scale, o.get("representation", "hull"))
+    raise ValueError(f"unknown obstacle shape {shape!r}")
 
 
 def main():
@@ -51,12 +81,13 @@ def main():
     pin.removeCollisionPairs(model, geom, srdf)
     self_pairs = len(geom.collisionPairs)
     obstacles = []
-    skipped = 0
+    meshes = 0
+    surfaces = 0  # meshes checked as triangles
     for k, o in enumerate(scenario.get("obstacle", [])):
-        g = obstacle_geometry(o)
-        if g is None:
-            skipped += 1
-            continue
+        g = obstacle_geometry(o, os.path.dirname(scenario_path))
+        if o["shape"] == "mesh":
+            meshes += 1
+            surfaces += o.get("representation", "hull") != "hull"
         placement = pin.SE3(rotation(o), np.array(o["position"], dtype=float))
         gid = geom.addGeometryObject(pin.GeometryObject(f"obstacle{k}", 0, placement, g))
         obstacles.append(gid)
@@ -99,9 +130,15 @@ def main():
                         )
     print(
         f"{checked} configurations, {self_pairs} self pairs enabled by the SRDF, "
-        f"{len(obstacles)} obstacles ({skipped} mesh obstacles skipped), "
+        f"{len(obstacles)} obstacles ({meshes} mesh obstacles checked), "
         f"smallest body-obstacle distance {worst:.4f} m, clearance {clearance} m"
     )
+    if surfaces:
+        print(
+            f"  note: {surfaces} mesh obstacles checked as triangle surfaces: a body entirely "
+            "inside a closed mesh is not a contact (it must have crossed the surface between "
+            "two samples to get there)"
+        )
     for h in hits[:20]:
         print(f"  task {h[0]}: {h[1]} - {h[2]} at {h[3]:.4f} m")
     print(f"{len(hits)} contacts")
