@@ -6,12 +6,45 @@ use std::path::Path;
 
 /// Writes `bytes` to `path` atomically: into a temporary file in the same directory, flushed
 /// and synced, then renamed over `path`. A crash or a full disk leaves the old file (or none).
+///
+/// A symbolic link is followed: the file it names is replaced and the link kept (a link to
+/// nothing is refused). An existing target that is not a regular file (`/dev/null`, a pipe
+/// such as `/dev/stdout`, a terminal) is written into directly, as a shell's `>` would, and is
+/// never replaced; a directory is refused.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let write_err = |source| Error::Write {
         path: path.to_path_buf(),
         source,
     };
-    let dir = match path.parent() {
+    let resolved;
+    let target = match std::fs::symlink_metadata(path) {
+        Ok(m) if m.file_type().is_symlink() => {
+            resolved = std::fs::canonicalize(path).map_err(|_| {
+                write_err(std::io::Error::new(
+                    std::io::ErrorKind::NotFound,
+                    "a dangling symbolic link",
+                ))
+            })?;
+            resolved.as_path()
+        }
+        _ => path,
+    };
+    if let Ok(m) = std::fs::metadata(target) {
+        if m.is_dir() {
+            return Err(write_err(std::io::Error::new(
+                std::io::ErrorKind::IsADirectory,
+                "is a directory",
+            )));
+        }
+        if !m.is_file() {
+            let mut f = std::fs::OpenOptions::new()
+                .write(true)
+                .open(target)
+                .map_err(write_err)?;
+            return f.write_all(bytes).and_then(|()| f.flush()).map_err(write_err);
+        }
+    }
+    let dir = match target.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
@@ -30,7 +63,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
             .set_permissions(std::fs::Permissions::from_mode(0o644))
             .map_err(write_err)?;
     }
-    tmp.persist(path).map_err(|e| write_err(e.error))?;
+    tmp.persist(target).map_err(|e| write_err(e.error))?;
     Ok(())
 }
 
@@ -53,6 +86,54 @@ mod tests {
         }
         let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
         assert_eq!(names.len(), 1, "temporary files must not be left behind");
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn special_files_are_written_into_and_links_kept() {
+        let dir = tempfile::tempdir().unwrap();
+        // A pipe (as `/dev/stdout` piped into another program) is written into, never
+        // replaced: its reader gets the bytes.
+        use std::io::Read;
+        use std::os::unix::fs::{FileTypeExt, OpenOptionsExt};
+        let fifo = dir.path().join("pipe");
+        let name = std::ffi::CString::new(fifo.as_os_str().as_encoded_bytes()).unwrap();
+        assert_eq!(unsafe { libc::mkfifo(name.as_ptr(), 0o600) }, 0);
+        let mut reader = std::fs::OpenOptions::new()
+            .read(true)
+            .custom_flags(libc::O_NONBLOCK)
+            .open(&fifo)
+            .unwrap();
+        write_atomic(&fifo, b"through the pipe").unwrap();
+        assert!(std::fs::symlink_metadata(&fifo)
+            .unwrap()
+            .file_type()
+            .is_fifo());
+        let mut got = String::new();
+        reader.read_to_string(&mut got).unwrap();
+        assert_eq!(got, "through the pipe");
+        // A link keeps pointing at its file, which gets the new content.
+        let file = dir.path().join("real.txt");
+        std::fs::write(&file, "old").unwrap();
+        let link = dir.path().join("link.txt");
+        std::os::unix::fs::symlink(&file, &link).unwrap();
+        write_atomic(&link, b"new").unwrap();
+        assert!(std::fs::symlink_metadata(&link)
+            .unwrap()
+            .file_type()
+            .is_symlink());
+        assert_eq!(std::fs::read_to_string(&file).unwrap(), "new");
+        // A dangling link and a directory are refused; nothing is left behind.
+        let dangling = dir.path().join("dangling");
+        std::os::unix::fs::symlink(dir.path().join("nothing"), &dangling).unwrap();
+        let e = write_atomic(&dangling, b"x").unwrap_err().to_string();
+        assert!(e.contains("a dangling symbolic link"), "{e}");
+        let sub = dir.path().join("sub");
+        std::fs::create_dir(&sub).unwrap();
+        let e = write_atomic(&sub, b"x").unwrap_err().to_string();
+        assert!(e.contains("directory"), "{e}");
+        let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+        assert_eq!(names.len(), 5, "no temporary file may be left behind");
     }
 
     #[test]

@@ -542,3 +542,37 @@ fn urdf_with_too_many_collision_elements_is_refused() {
     ]);
     assert_eq!(code, Some(0), "{stderr}");
 }
+
+#[test]
+fn urdf_output_never_overwritten_by_its_own_srdf() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = write(dir.path(), "d.json", &design("0.3", "[-1, 1]", 2));
+    let urdf = |out: &Path| -> Vec<std::ffi::OsString> {
+        vec![
+            "urdf".into(),
+            d.clone().into_os_string(),
+            "-o".into(),
+            out.as_os_str().to_owned(),
+        ]
+    };
+    // `-o x.srdf` would write the URDF, then the SRDF over it.
+    let same = dir.path().join("x.srdf");
+    let a = urdf(&same);
+    let a: Vec<&OsStr> = a.iter().map(|s| s.as_os_str()).collect();
+    rejected(&a, &["-o", "x.srdf", "must not end in .srdf"]);
+    assert!(!same.exists(), "nothing may be written");
+    // An SRDF path that is a directory is refused before the URDF is written.
+    std::fs::create_dir(dir.path().join("r.srdf")).unwrap();
+    let out = dir.path().join("r.urdf");
+    let a = urdf(&out);
+    let a: Vec<&OsStr> = a.iter().map(|s| s.as_os_str()).collect();
+    rejected(&a, &["r.urdf", "r.srdf", "is a directory"]);
+    assert!(!out.exists(), "no URDF may be left without its SRDF");
+    // The usual case writes both.
+    let ok = dir.path().join("ok.urdf");
+    let a = urdf(&ok);
+    let a: Vec<&OsStr> = a.iter().map(|s| s.as_os_str()).collect();
+    let (code, stderr) = run(&a);
+    assert_eq!(code, Some(0), "{stderr}");
+    assert!(ok.is_file() && dir.path().join("ok.srdf").is_file());
+}

@@ -34,6 +34,21 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         None => kinsynth::collision::SelfCollisionConfig::default(),
     };
     let srdf = output.with_extension("srdf");
+    if srdf == output {
+        return Err(kinsynth::Error::invalid(
+            "-o",
+            output.display(),
+            "the URDF must not end in .srdf (the SRDF is written beside it under that name)",
+        ));
+    }
+    if srdf.is_dir() {
+        // Refused before anything is written, so that no URDF is left without its SRDF.
+        return Err(kinsynth::Error::invalid(
+            "-o",
+            output.display(),
+            format!("its SRDF {} is a directory", srdf.display()),
+        ));
+    }
     kinsynth::export::write_urdf(&d, &output)?;
     kinsynth::export::write_srdf(&d, &config, &srdf)?;
     say!(
