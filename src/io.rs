@@ -41,7 +41,10 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
                 .write(true)
                 .open(target)
                 .map_err(write_err)?;
-            return f.write_all(bytes).and_then(|()| f.flush()).map_err(write_err);
+            return f
+                .write_all(bytes)
+                .and_then(|()| f.flush())
+                .map_err(write_err);
         }
     }
     let dir = match target.parent() {

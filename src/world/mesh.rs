@@ -250,9 +250,30 @@ impl fmt::Display for FmtExtension<'_> {
 /// * `DELETE_DEGENERATE_TRIANGLES` drops triangles that have two equal
 ///   vertices after merging; their zero normal can make points whose closest
 ///   feature lies on such a triangle count as inside.
-const TRIMESH_FLAGS: TriMeshFlags = TriMeshFlags::ORIENTED
-    .union(TriMeshFlags::MERGE_DUPLICATE_VERTICES)
-    .union(TriMeshFlags::DELETE_DEGENERATE_TRIANGLES);
+///
+/// `ORIENTED` is set only once the merged mesh is known to be closed and consistently
+/// oriented ([`closed_and_oriented`]): the pseudo-normals of an open surface would make
+/// points far behind it count as inside.
+const TRIMESH_FLAGS: TriMeshFlags =
+    TriMeshFlags::MERGE_DUPLICATE_VERTICES.union(TriMeshFlags::DELETE_DEGENERATE_TRIANGLES);
+
+/// True when every directed edge of `triangles` appears exactly once and its reverse exactly
+/// once: the surface is closed (every edge shared by two triangles) and its triangles turn the
+/// same way. Sorts the edges, so memory is linear in the triangles.
+pub fn closed_and_oriented(triangles: &[[u32; 3]]) -> bool {
+    let mut edges: Vec<(u32, u32)> = triangles
+        .iter()
+        .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
+        .collect();
+    edges.sort_unstable();
+    if edges.windows(2).any(|w| w[0] == w[1]) {
+        return false;
+    }
+    !edges.is_empty()
+        && edges
+            .iter()
+            .all(|&(a, b)| edges.binary_search(&(b, a)).is_ok())
+}
 
 /// Voxel grid resolution (along the longest side of the mesh bounding box)
 /// used by [`MeshData::to_convex_decomposition`].
@@ -330,16 +351,22 @@ impl MeshData {
     /// Converts the mesh into a parry triangle mesh.
     ///
     /// Identical vertex positions are merged and triangles made degenerate by
-    /// the merge are dropped. Pseudo-normals are computed so that, when the
-    /// mesh is closed and its triangles are counter-clockwise seen from
-    /// outside, `contains_point` and `project_point(.., solid = true)` tell
-    /// points inside the solid from points outside. For an open mesh those
-    /// answers are meaningless near the boundary; distance and intersection
-    /// queries work either way.
+    /// the merge are dropped. When the merged mesh is closed and consistently
+    /// oriented ([`closed_and_oriented`]), pseudo-normals are computed so that,
+    /// its triangles counter-clockwise seen from outside, `contains_point` and
+    /// `project_point(.., solid = true)` tell points inside the solid from
+    /// points outside. An open mesh is a surface: it contains no point and
+    /// nothing is inside it. Distance and intersection queries work either way.
     pub fn to_parry_trimesh(&self) -> Result<TriMesh, ShapeError> {
         self.validate()?;
-        TriMesh::with_flags(self.parry_vertices(), self.triangles.clone(), TRIMESH_FLAGS)
-            .map_err(ShapeError::TriMesh)
+        let mut mesh =
+            TriMesh::with_flags(self.parry_vertices(), self.triangles.clone(), TRIMESH_FLAGS)
+                .map_err(ShapeError::TriMesh)?;
+        if closed_and_oriented(mesh.indices()) {
+            // Only the topology flags can fail, and none is asked for.
+            let _ = mesh.set_flags(TRIMESH_FLAGS | TriMeshFlags::ORIENTED);
+        }
+        Ok(mesh)
     }
 
     /// The convex hull of all vertices, as a parry convex polyhedron.
@@ -1456,6 +1483,39 @@ f -3 -2 -1
         for q in [p(0.95, 0.5, 0.005), p(0.9, 0.01, 0.01), p(0.02, 0.98, 0.19)] {
             assert!(trimesh.contains_point(&id, q), "{q:?} should be inside");
         }
+    }
+
+    #[test]
+    fn open_trimesh_contains_nothing() {
+        // One triangle, and the cube without its last face: points behind them, near and far,
+        // are not inside (the pseudo-normals of an open surface would say they are).
+        let mut open_cube = cube();
+        open_cube.triangles.truncate(open_cube.triangles.len() - 2);
+        let triangle = MeshData {
+            vertices: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            triangles: vec![[0, 1, 2]],
+        };
+        assert!(closed_and_oriented(&cube().triangles));
+        for mesh in [open_cube, triangle] {
+            assert!(!closed_and_oriented(&mesh.triangles));
+            let trimesh = mesh.to_parry_trimesh().unwrap();
+            for q in [
+                p(0.5, 0.5, 0.5),
+                p(0.2, 0.2, -0.01),
+                p(0.2, 0.2, -50.0),
+                p(0.2, 0.2, 50.0),
+            ] {
+                assert!(!trimesh.contains_point(&Pose::IDENTITY, q), "{q:?}");
+                assert!(
+                    !trimesh.project_point(&Pose::IDENTITY, q, true).is_inside,
+                    "{q:?}"
+                );
+            }
+        }
+        // A face turned the wrong way is not consistently oriented.
+        let mut flipped = cube();
+        flipped.triangles[0].swap(1, 2);
+        assert!(!closed_and_oriented(&flipped.triangles));
     }
 
     #[test]
