@@ -755,3 +755,91 @@ fn repeated_collision_elements_add_no_body() {
     let shifted = import(&write("shifted.urdf", shifted), &ImportOptions::default());
     assert_eq!(shifted.body.len(), base.body.len() + 1);
 }
+
+/// A binary STL of a UV sphere of `radius` with `around × (around / 2)` quads (two triangles
+/// each, one at each pole).
+fn uv_sphere_stl(path: &Path, radius: f64, around: usize) {
+    let rings = around / 2;
+    let at = |i: usize, j: usize| -> [f32; 3] {
+        let (theta, phi) = (
+            PI * j as f64 / rings as f64,
+            2.0 * PI * i as f64 / around as f64,
+        );
+        [
+            (radius * theta.sin() * phi.cos()) as f32,
+            (radius * theta.sin() * phi.sin()) as f32,
+            (radius * theta.cos()) as f32,
+        ]
+    };
+    let mut triangles = Vec::new();
+    for i in 0..around {
+        for j in 0..rings {
+            let (a, b) = (at(i, j), at(i + 1, j));
+            let (c, d) = (at(i, j + 1), at(i + 1, j + 1));
+            triangles.push([a, c, d]);
+            triangles.push([a, d, b]);
+        }
+    }
+    let mut bytes = vec![0u8; 80];
+    bytes.extend_from_slice(&(triangles.len() as u32).to_le_bytes());
+    for t in &triangles {
+        bytes.extend_from_slice(&[0u8; 12]);
+        for v in t {
+            for c in v {
+                bytes.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+        bytes.extend_from_slice(&[0u8; 2]);
+    }
+    std::fs::write(path, bytes).unwrap();
+}
+
+/// A finely tessellated mesh becomes a hull of its distinct points, and elements naming the
+/// same file at the same scale share that hull: 40 elements of a 19,600-triangle sphere import
+/// as one shape (each read its file and built its hull: 100 elements of a 1M-triangle mesh
+/// exhausted 4 GB).
+#[test]
+fn mesh_elements_share_one_hull_of_distinct_points() {
+    let dir = tempfile::tempdir().unwrap();
+    let sphere = dir.path().join("sphere.stl");
+    uv_sphere_stl(&sphere, 0.02, 140);
+    let (hull, points) = load_hull(&sphere, [1.0, 1.0, 1.0]).unwrap();
+    assert_eq!(points, 3 * 140 * 70 * 2, "points read, three per triangle");
+    let kept = hull.as_convex_polyhedron().unwrap().points().len();
+    assert!(
+        kept <= 140 * 69 + 2,
+        "{kept} hull vertices for 9,662 distinct points"
+    );
+    let mesh = r#"<collision><geometry><mesh filename="../../meshes/arm/link1.stl" scale="1 1 1"/></geometry></collision>"#;
+    let text = std::fs::read_to_string(arm_urdf()).unwrap();
+    assert!(text.contains(mesh));
+    let copies: String = (0..40)
+        .map(|k| {
+            format!(
+                r#"<collision><origin xyz="0 0 {}"/><geometry><mesh filename="{}" scale="1 1 1"/></geometry></collision>"#,
+                0.01 * k as f64,
+                sphere.display()
+            )
+        })
+        .collect();
+    let text = text
+        .replace(mesh, &format!("{mesh}{copies}"))
+        .replace("../../meshes/", &format!("{}/meshes/", root().display()));
+    let p = dir.path().join("many.urdf");
+    std::fs::write(&p, text).unwrap();
+    let robot = import(&p, &ImportOptions::default());
+    let spheres: Vec<_> = robot
+        .body
+        .solids()
+        .iter()
+        .filter(|s| {
+            s.shape
+                .as_convex_polyhedron()
+                .is_some_and(|c| c.points().len() == kept)
+        })
+        .collect();
+    assert_eq!(spheres.len(), 40);
+    assert!(spheres
+        .iter()
+        .all(|s| Arc::ptr_eq(&s.shape.0, &spheres[0].shape.0)));
+}
