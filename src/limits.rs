@@ -34,8 +34,10 @@ pub const MAX_TASKS: usize = 10_000;
 pub const MAX_OBSTACLES: usize = 100_000;
 /// Most triangles of one mesh file.
 pub const MAX_MESH_TRIANGLES: usize = 5_000_000;
-/// Most mesh triangles of all mesh obstacles of a scenario together.
-pub const MAX_SCENE_MESH_TRIANGLES: usize = 20_000_000;
+/// Most mesh triangles of the distinct meshes of a scenario together (a file placed again with
+/// the same representation and scale shares the first one's shape and adds nothing). A
+/// 5M-triangle `trimesh` takes about 3 GB while it is built.
+pub const MAX_SCENE_MESH_TRIANGLES: usize = 5_000_000;
 /// Largest magnitude of a length or coordinate, in metres: DH `a` and `d`, prismatic limits,
 /// positions, task points, radii, sizes, clearance, tolerances and scaled mesh vertices.
 pub const MAX_LENGTH: f64 = 1e3;

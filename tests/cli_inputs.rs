@@ -576,3 +576,47 @@ fn urdf_output_never_overwritten_by_its_own_srdf() {
     assert_eq!(code, Some(0), "{stderr}");
     assert!(ok.is_file() && dir.path().join("ok.srdf").is_file());
 }
+
+/// The scenario's mesh-triangle limit counts distinct meshes: a file placed again with the same
+/// representation and scale shares its shape and adds nothing, one at another scale is another
+/// mesh. An OBJ tetrahedron whose four faces repeat 650,000 times (2.6M triangles) is placed
+/// three times (7.8M triangles, one mesh: accepted), then at a second scale (5.2M: refused).
+#[test]
+fn scene_mesh_limit_counts_distinct_meshes() {
+    use kinsynth::limits::MAX_SCENE_MESH_TRIANGLES;
+    let dir = tempfile::tempdir().unwrap();
+    let repeats = MAX_SCENE_MESH_TRIANGLES / 8 + 25_000;
+    let mut obj = String::from("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n");
+    let faces = "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+    obj.reserve(faces.len() * repeats);
+    for _ in 0..repeats {
+        obj.push_str(faces);
+    }
+    write(dir.path(), "tetra.obj", &obj);
+    let placed = |scale: f64, x: f64| {
+        format!(
+            "\n[[obstacle]]\nshape = \"mesh\"\nfile = \"tetra.obj\"\nscale = {scale}\nposition = [{x}, 5.0, 5.0]\n"
+        )
+    };
+    let copies = format!(
+        "{ROBOT}{TASK}{}{}{}",
+        placed(0.1, 3.0),
+        placed(0.1, 4.0),
+        placed(0.1, 5.0)
+    );
+    let p = write(dir.path(), "copies.toml", &copies);
+    let (code, stderr) = run(&check(&p));
+    assert_eq!(code, Some(0), "{stderr}");
+    let two = format!("{copies}{}", placed(0.2, 6.0));
+    let p = write(dir.path(), "two.toml", &two);
+    rejected(
+        &check(&p),
+        &[
+            "two.toml",
+            "obstacle[3].file",
+            "tetra.obj",
+            "5200000 triangles",
+            "5000000",
+        ],
+    );
+}

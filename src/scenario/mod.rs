@@ -554,14 +554,18 @@ impl Scenario {
         // A mesh placed many times is read and converted once.
         let mut meshes = MeshCache::new();
         for (k, o) in spec.obstacle.iter().enumerate() {
+            let built = meshes.len();
             let obstacle = Self::obstacle(k, o, dir, &mut meshes)?;
-            mesh_triangles += obstacle.mesh_triangles();
+            // Only a newly built mesh adds triangles: copies share its shape.
+            if meshes.len() > built {
+                mesh_triangles += obstacle.mesh_triangles();
+            }
             check(
                 mesh_triangles <= MAX_SCENE_MESH_TRIANGLES,
                 format!("obstacle[{k}].file"),
                 o.file.as_deref().unwrap_or(""),
                 &format!(
-                    "the mesh obstacles up to here have {mesh_triangles} triangles, more than \
+                    "the distinct meshes up to here have {mesh_triangles} triangles, more than \
                      the limit of {MAX_SCENE_MESH_TRIANGLES} for a scenario"
                 ),
             )?;
