@@ -45,6 +45,19 @@ pub const MAX_LENGTH: f64 = 1e3;
 pub const MAX_ANGLE: f64 = 1e3;
 /// Most RRT iterations per evaluation (`planner.max_iterations`, `planner.schedule`).
 pub const MAX_ITERATIONS: usize = 100_000;
+/// Most RRT iterations times the design's free axes: the nearest-node search scans the tree,
+/// so a run that reaches nothing costs about the square of its iterations times its axes
+/// (100,000 iterations of a 24-axis design: 26 s).
+pub const MAX_ITERATION_AXES: usize = 2_400_000;
+
+/// The most RRT iterations a design of `axes` free axes may run: [`MAX_ITERATIONS`], and
+/// fewer for a design of more than 24 axes ([`MAX_ITERATION_AXES`]).
+pub fn iteration_cap(axes: usize) -> usize {
+    (MAX_ITERATION_AXES / axes.max(1)).clamp(1, MAX_ITERATIONS)
+}
+/// Most random configurations sampled for the allowed-collision matrix
+/// (`robot.self_collision_samples`; MoveIt's setup assistant offers up to 100,000).
+pub const MAX_SELF_COLLISION_SAMPLES: usize = 100_000;
 /// Most damped-least-squares steps per extension (`planner.ik_steps`).
 pub const MAX_IK_STEPS: usize = 10_000;
 /// Most backward trees per task (`planner.postures`).

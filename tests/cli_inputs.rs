@@ -620,3 +620,60 @@ fn scene_mesh_limit_counts_distinct_meshes() {
         ],
     );
 }
+
+/// Iterations cost more on designs of many axes (the nearest-node search scans the tree):
+/// iterations × the largest design's axes are at most 2,400,000, for `max_iterations` and the
+/// schedule's budgets; 64 links of six axes allow 6,250. The allowed-collision samples are at
+/// most 100,000.
+#[test]
+fn iteration_limit_shrinks_with_the_axes() {
+    let dir = tempfile::tempdir().unwrap();
+    let robot = "[robot]\nlinks = 64\n[robot.uniform]\na = [0.0, 0.05]\naxes.rx = { min = -1, max = 1 }\naxes.ry = { min = -1, max = 1 }\naxes.rz = { min = -1, max = 1 }\naxes.tx = { min = -0.01, max = 0.01 }\naxes.ty = { min = -0.01, max = 0.01 }\naxes.tz = { min = -0.01, max = 0.01 }\n";
+    for (planner, ok, parts) in [
+        ("max_iterations = 6250", true, vec![]),
+        (
+            "max_iterations = 6251",
+            false,
+            vec![
+                "planner.max_iterations = 6251",
+                "384 free axes",
+                "at most 6250",
+            ],
+        ),
+        (
+            "schedule = { l_max = [0.5, 0.2], iterations = [2000, 100000] }",
+            false,
+            vec!["planner.schedule.iterations = 100000", "at most 6250"],
+        ),
+    ] {
+        let p = write(
+            dir.path(),
+            "s.toml",
+            &format!("{robot}[planner]\n{planner}\n{TASK}"),
+        );
+        if ok {
+            let (code, stderr) = run(&check(&p));
+            assert_eq!(code, Some(0), "{stderr}");
+        } else {
+            let mut all = vec!["s.toml"];
+            all.extend(parts);
+            rejected(&check(&p), &all);
+        }
+    }
+    for (n, ok) in [(100_000, true), (100_001, false)] {
+        let p = write(
+            dir.path(),
+            "s.toml",
+            &format!("{ROBOT}self_collision_samples = {n}\n{TASK}"),
+        );
+        if ok {
+            let (code, stderr) = run(&check(&p));
+            assert_eq!(code, Some(0), "{stderr}");
+        } else {
+            rejected(
+                &check(&p),
+                &["robot.self_collision_samples", "100001", "at most 100000"],
+            );
+        }
+    }
+}

@@ -6,7 +6,7 @@ use super::ik::{dls_oriented, IkWork};
 use super::PlannerConfig;
 use crate::collision::{EdgeChecker, Scratch};
 use crate::kinematics::{Chain, Frames};
-use crate::limits::MAX_ITERATIONS;
+use crate::limits::iteration_cap;
 use crate::world::TaskOrientation;
 use nalgebra::{Matrix3, Point3};
 use rand::RngExt;
@@ -663,8 +663,9 @@ impl<'a> Rrt<'a> {
 
     /// Grows the forward tree from home until every task is reached (every task within the
     /// chain's reach bound: the others cannot be, see [`Chain::reach_bound`]), for up to
-    /// `config.max_iterations` iterations, or up to `budget_growth` times as many (at most
-    /// [`MAX_ITERATIONS`]) while an unreached task has a backward tree (a collision-free posture
+    /// `config.max_iterations` iterations, or up to `budget_growth` times as many while an
+    /// unreached task has a backward tree ([`budgets`]: both at most
+    /// [`crate::limits::iteration_cap`] of the design's axes; a collision-free posture
     /// on the task is known, so more work is likely to pay), and within the time cap if set.
     /// Each iteration is, with probability `goal_bias`, a goal-biased one: greedy extensions
     /// toward IK goals of an unreached task, whose collision-free postures on the task root the
@@ -709,11 +710,11 @@ impl<'a> Rrt<'a> {
         chain.fk(&home, &mut s.work.frames);
         s.tree.push(&home, &s.work.frames, 0);
         self.mark_reached(&s.tree, 0, &mut s.reached);
-        let base = self.config.max_iterations;
-        let grown = base
-            .saturating_mul(self.config.budget_growth)
-            .min(MAX_ITERATIONS)
-            .max(base);
+        let (base, grown) = budgets(
+            self.config.max_iterations,
+            self.config.budget_growth,
+            chain.dof(),
+        );
         let start = Instant::now();
         let mut iterations = 0;
         while s
@@ -760,6 +761,16 @@ impl<'a> Rrt<'a> {
             home_blocked: false,
         }
     }
+}
+
+/// The iteration budgets of a planner run on a design of `axes` free axes: the base budget
+/// `max_iterations` and the grown one, `budget_growth` times as many, both within
+/// [`iteration_cap`] of the axes (100,000 iterations up to 24 axes, fewer beyond).
+pub fn budgets(max_iterations: usize, budget_growth: usize, axes: usize) -> (usize, usize) {
+    let cap = iteration_cap(axes);
+    let base = max_iterations.min(cap);
+    let grown = base.saturating_mul(budget_growth).min(cap).max(base);
+    (base, grown)
 }
 
 #[cfg(test)]
@@ -881,5 +892,18 @@ mod tests {
             main.path_to(offset + 1),
             vec![vec![0.0, 0.0], vec![0.3, 0.0], vec![0.6, 0.0]]
         );
+    }
+
+    #[test]
+    fn budgets_shrink_with_the_axes_beyond_24() {
+        // Up to 24 axes: the configured budget, grown up to 100,000.
+        assert_eq!(budgets(2_000, 5, 8), (2_000, 10_000));
+        assert_eq!(budgets(100_000, 5, 24), (100_000, 100_000));
+        assert_eq!(budgets(30_000, 100, 2), (30_000, 100_000));
+        // 384 axes (64 links of six): at most 2,400,000 / 384 = 6,250 iterations.
+        assert_eq!(budgets(100_000, 5, 384), (6_250, 6_250));
+        assert_eq!(budgets(2_000, 5, 384), (2_000, 6_250));
+        assert_eq!(budgets(2_000, 1, 48), (2_000, 2_000));
+        assert_eq!(budgets(60_000, 2, 48), (50_000, 50_000));
     }
 }

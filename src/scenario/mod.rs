@@ -263,6 +263,24 @@ impl Scenario {
         let space = Self::design_space(spec)?;
         let workspace = Self::workspace(spec, dir)?;
         spec.planner.validate()?;
+        // The nearest-node search makes iterations cost more on designs of many axes.
+        let axes = space.largest().chain().dof();
+        let cap = crate::limits::iteration_cap(axes);
+        let schedule = spec.planner.schedule.iter().flat_map(|s| s.iterations);
+        for (field, n) in std::iter::once(("planner.max_iterations", spec.planner.max_iterations))
+            .chain(schedule.map(|n| ("planner.schedule.iterations", n)))
+        {
+            check(
+                n <= cap,
+                field,
+                n,
+                &format!(
+                    "the largest design has {axes} free axes, which allows at most {cap} \
+                     iterations (iterations × axes at most {})",
+                    crate::limits::MAX_ITERATION_AXES
+                ),
+            )?;
+        }
         for (i, w) in spec.objective.as_array().into_iter().enumerate() {
             check_non_negative_within(w, MAX_SETTING, "", format!("objective.lambda{i}"))?;
         }
@@ -287,11 +305,12 @@ impl Scenario {
                 }
             }
         }
+        let max_samples = crate::limits::MAX_SELF_COLLISION_SAMPLES;
         check(
-            r.self_collision_samples <= 1_000_000,
+            r.self_collision_samples <= max_samples,
             "robot.self_collision_samples",
             r.self_collision_samples,
-            "must be at most 1000000",
+            &format!("must be at most {max_samples}"),
         )?;
         // Each pair once, in either order: the matrix is rebuilt for every design evaluated.
         let mut allowed: Vec<[usize; 2]> = r
