@@ -205,6 +205,17 @@ pub enum ShapeError {
     /// parry refused to build the triangle mesh.
     #[error("cannot build a parry triangle mesh: {0}")]
     TriMesh(TriMeshBuilderError),
+    /// The decomposition's voxelization would test more voxel–triangle pairs than
+    /// [`MAX_DECOMPOSITION_TESTS`] (large triangles that cross the mesh's bounding box).
+    #[error(
+        "its triangles span {tests} voxel-triangle tests at resolution {DECOMPOSITION_RESOLUTION}, \
+         more than the limit of {MAX_DECOMPOSITION_TESTS} (large triangles across the mesh make \
+         the decomposition slow): use `hull` or `trimesh`, or remesh it into smaller triangles"
+    )]
+    DecompositionTooCostly {
+        /// The estimated number of tests.
+        tests: u64,
+    },
     /// The convex decomposition produced no usable convex part. (A flat mesh
     /// still gives one flat part; this guards against inputs for which parry
     /// finds none.)
@@ -278,6 +289,49 @@ pub fn closed_and_oriented(triangles: &[[u32; 3]]) -> bool {
 /// Voxel grid resolution (along the longest side of the mesh bounding box)
 /// used by [`MeshData::to_convex_decomposition`].
 const DECOMPOSITION_RESOLUTION: u32 = 32;
+
+/// Most voxel–triangle intersection tests the voxelization of a convex decomposition may make
+/// (each triangle is tested against every voxel of its bounding box grown by one voxel, about 5
+/// million tests a second): 10,000 random triangles across a box need 62 million (13 s), while
+/// a surface of a million small triangles needs about 27 million (the 27 voxels around each).
+pub const MAX_DECOMPOSITION_TESTS: u64 = 40_000_000;
+
+/// The number of voxel–triangle tests parry's voxelization makes for `triangles` of `vertices`
+/// at `resolution` voxels along the longest side of their bounding box: per triangle, the
+/// voxels of its bounding box grown by one voxel on each side (as
+/// `VoxelizedVolume::voxelize`).
+fn voxel_tests(vertices: &[[f64; 3]], triangles: &[[u32; 3]], resolution: u32) -> u64 {
+    let (mut min, mut max) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for v in vertices {
+        for k in 0..3 {
+            min[k] = min[k].min(v[k]);
+            max[k] = max[k].max(v[k]);
+        }
+    }
+    let longest = (0..3).map(|k| max[k] - min[k]).fold(0.0, f64::max);
+    if longest.is_nan() || longest <= 0.0 {
+        return 0;
+    }
+    let scale = f64::from(resolution.max(2) - 1) / longest;
+    let cells: [i64; 3] = std::array::from_fn(|k| ((max[k] - min[k]) * scale) as i64 + 3);
+    triangles
+        .iter()
+        .map(|t| {
+            let mut count = 1u64;
+            for k in 0..3 {
+                let at = |i: u32| ((vertices[i as usize][k] - min[k]) * scale + 0.5) as i64;
+                let (lo, hi) = (
+                    t.iter().map(|&i| at(i)).min(),
+                    t.iter().map(|&i| at(i)).max(),
+                );
+                let (lo, hi) = (lo.unwrap_or(0), hi.unwrap_or(0));
+                let span = ((hi + 2).min(cells[k]) - (lo - 1).max(0)).max(0);
+                count *= span as u64;
+            }
+            count
+        })
+        .sum()
+}
 
 /// A triangle whose doubled area is at most this fraction of the squared
 /// bounding-box diagonal counts as having zero area.
@@ -407,6 +461,10 @@ impl MeshData {
     /// than the voxels.
     pub fn to_convex_decomposition(&self) -> Result<SharedShape, ShapeError> {
         self.validate()?;
+        let tests = voxel_tests(&self.vertices, &self.triangles, DECOMPOSITION_RESOLUTION);
+        if tests > MAX_DECOMPOSITION_TESTS {
+            return Err(ShapeError::DecompositionTooCostly { tests });
+        }
         let vertices = self.parry_vertices();
         let params = VHACDParameters {
             resolution: DECOMPOSITION_RESOLUTION,
@@ -1483,6 +1541,39 @@ f -3 -2 -1
         for q in [p(0.95, 0.5, 0.005), p(0.9, 0.01, 0.01), p(0.02, 0.98, 0.19)] {
             assert!(trimesh.contains_point(&id, q), "{q:?} should be inside");
         }
+    }
+
+    #[test]
+    fn decomposition_refuses_triangles_that_span_the_mesh() {
+        use rand::{RngExt, SeedableRng};
+        // 10,000 random triangles across a unit box: each spans a large share of the 32³ grid.
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let mut soup = MeshData {
+            vertices: Vec::new(),
+            triangles: Vec::new(),
+        };
+        for t in 0..10_000u32 {
+            for _ in 0..3 {
+                soup.vertices
+                    .push(std::array::from_fn(|_| rng.random::<f64>()));
+            }
+            soup.triangles.push([3 * t, 3 * t + 1, 3 * t + 2]);
+        }
+        match soup.to_convex_decomposition() {
+            Err(ShapeError::DecompositionTooCostly { tests }) => {
+                assert!(tests > MAX_DECOMPOSITION_TESTS, "{tests}")
+            }
+            other => panic!("expected a refusal, got {other:?}"),
+        }
+        // A small triangle costs the 27 voxels around it; the cube's twelve, at most the grid.
+        let cube = cube();
+        let tiny = [[0.5, 0.5, 0.5], [0.5001, 0.5, 0.5], [0.5, 0.5001, 0.5]];
+        let mut vertices = cube.vertices.clone();
+        vertices.extend(tiny);
+        let n = cube.vertices.len() as u32;
+        assert_eq!(voxel_tests(&vertices, &[[n, n + 1, n + 2]], 32), 27);
+        assert!(voxel_tests(&cube.vertices, &cube.triangles, 32) <= 12 * 34 * 34 * 34);
+        assert!(cube.to_convex_decomposition().is_ok());
     }
 
     #[test]
