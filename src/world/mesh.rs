@@ -883,6 +883,18 @@ fn parse_stl(path: &Path, bytes: &[u8]) -> Result<MeshData, MeshError> {
                     ),
                 ));
             }
+            if bytes.len() as u64 >= expected + STL_BINARY_TRIANGLE {
+                // A whole triangle record or more past the declared ones: the count is wrong
+                // (reading it would silently drop triangles). Shorter trailers are padding.
+                return Err(parse_error(
+                    format,
+                    format!(
+                        "the header declares {count} triangles, which need {expected} bytes, \
+                         but the file has {} bytes: the count is wrong",
+                        bytes.len()
+                    ),
+                ));
+            }
             if bytes.starts_with(b"solid") {
                 // Blank the header so stl_io does not take it for ASCII.
                 let mut patched = bytes.to_vec();
@@ -1370,6 +1382,21 @@ f -3 -2 -1
             message.contains("cannot parse as binary STL: the header declares 12 triangles"),
             "{message}"
         );
+
+        // A count smaller than the triangles held: refused, not read short; a short trailer
+        // (padding) is accepted.
+        let mut bytes = binary_stl_bytes(&cube(), b"");
+        bytes[80..84].copy_from_slice(&11u32.to_le_bytes());
+        let path = write(&dir, "undercounted.stl", &bytes);
+        let message = load_err(&path);
+        assert!(
+            message.contains("declares 11 triangles, which need 634 bytes, but the file has 684 bytes: the count is wrong"),
+            "{message}"
+        );
+        let mut bytes = binary_stl_bytes(&cube(), b"");
+        bytes.extend_from_slice(&[0u8; 49]);
+        let path = write(&dir, "padded.stl", &bytes);
+        assert_eq!(load_mesh(&path).unwrap().triangles.len(), 12);
 
         let path = write(&dir, "short.stl", b"not a mesh");
         let message = load_err(&path);
