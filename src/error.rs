@@ -114,6 +114,50 @@ pub fn one_line(text: &str) -> std::borrow::Cow<'_, str> {
     std::borrow::Cow::Owned(parts.join(" "))
 }
 
+/// Longest word (run without spaces) an error message shows whole; longer ones, such as a long
+/// value quoted from the input, keep their ends ([`shorten`]).
+pub const MESSAGE_WORD: usize = 120;
+/// Longest error message shown whole ([`shorten`]).
+pub const MESSAGE_LENGTH: usize = 2_000;
+
+/// `text` short enough to read: every word longer than [`MESSAGE_WORD`] characters keeps its
+/// first 60 and last 20 with the number left out between them, and a message still longer than
+/// [`MESSAGE_LENGTH`] keeps its start (file and field) and its end (the reason). A 3 MB value in
+/// a scenario otherwise made a 3 MB error line.
+pub fn shorten(text: &str) -> std::borrow::Cow<'_, str> {
+    let long = |w: &str| w.chars().count() > MESSAGE_WORD;
+    if text.chars().count() <= MESSAGE_LENGTH && !text.split(' ').any(long) {
+        return std::borrow::Cow::Borrowed(text);
+    }
+    let words: Vec<String> = text
+        .split(' ')
+        .map(|w| {
+            if !long(w) {
+                return w.to_string();
+            }
+            let chars: Vec<char> = w.chars().collect();
+            let (head, tail) = (&chars[..60], &chars[chars.len() - 20..]);
+            format!(
+                "{}…[{} characters]…{}",
+                head.iter().collect::<String>(),
+                chars.len() - 80,
+                tail.iter().collect::<String>()
+            )
+        })
+        .collect();
+    let joined = words.join(" ");
+    let chars: Vec<char> = joined.chars().collect();
+    if chars.len() <= MESSAGE_LENGTH {
+        return std::borrow::Cow::Owned(joined);
+    }
+    let head: String = chars[..1_200].iter().collect();
+    let tail: String = chars[chars.len() - 600..].iter().collect();
+    std::borrow::Cow::Owned(format!(
+        "{head} …[{} characters]… {tail}",
+        chars.len() - 1_800
+    ))
+}
+
 /// A number for messages: as Rust writes it for ordinary magnitudes (`0.25`, `-3`), in exponent
 /// form for very large or very small ones (`1e308` rather than 309 digits).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -167,5 +211,30 @@ impl Error {
                 source: Box::new(other),
             },
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn long_values_are_shortened_keeping_field_and_reason() {
+        let short = "s.toml: robot.links = 3: must be at most 64";
+        assert_eq!(shorten(short), short);
+        let value = "a".repeat(1_000_000);
+        let text = format!("s.toml: robot.links = \"{value}\": expected a whole number");
+        let out = shorten(&text);
+        assert!(out.len() < 300, "{} bytes", out.len());
+        assert!(out.starts_with("s.toml: robot.links = \"aaa"), "{out}");
+        assert!(out.ends_with(": expected a whole number"), "{out}");
+        assert!(out.contains("[999923 characters]"), "{out}");
+        let spaced = format!("f.json: x = \"{}\": too long", "ab ".repeat(100_000));
+        let out = shorten(&spaced);
+        assert!(out.chars().count() < 2_000, "{}", out.chars().count());
+        assert!(
+            out.starts_with("f.json: x = ") && out.ends_with(": too long"),
+            "{out}"
+        );
     }
 }

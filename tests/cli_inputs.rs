@@ -677,3 +677,14 @@ fn iteration_limit_shrinks_with_the_axes() {
         }
     }
 }
+
+/// A long value quoted in an error keeps its ends only: a 1,000,000-character string where a
+/// number belongs gave a 1 MB error line.
+#[test]
+fn long_values_in_errors_are_shortened() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = format!("[robot]\nlinks = \"{}\"\n{TASK}", "a".repeat(1_000_000));
+    let p = write(dir.path(), "long.toml", &text);
+    let stderr = rejected(&check(&p), &["long.toml", "links", "characters]"]);
+    assert!(stderr.len() < 600, "{} bytes: {stderr}", stderr.len());
+}

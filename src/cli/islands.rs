@@ -48,7 +48,7 @@ pub fn run(args: Args, islands: Option<usize>) -> Result<(), kinsynth::Error> {
             // Rank 0 reports it before any rank ends: the launcher kills the job as soon as
             // one rank exits with a failure, which could be before rank 0 has printed it.
             if comm.rank() == 0 {
-                eprintln!("error: {error}");
+                eprintln!("error: {}", kinsynth::error::shorten(&error.to_string()));
             }
             comm.barrier();
             // Finalise MPI before this process ends.
@@ -59,7 +59,12 @@ pub fn run(args: Args, islands: Option<usize>) -> Result<(), kinsynth::Error> {
         // This rank failed alone while the others may wait for it: end the whole job.
         Err(JobError { error, .. }) => {
             if comm.size() > 1 {
-                eprintln!("error: rank {}: {error}", comm.rank());
+                let error_text = error.to_string();
+                eprintln!(
+                    "error: rank {}: {}",
+                    comm.rank(),
+                    kinsynth::error::shorten(&error_text)
+                );
                 comm.abort(1);
             }
             Err(error)
