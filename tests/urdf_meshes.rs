@@ -391,6 +391,19 @@ fn mesh_errors_name_the_urdf_the_link_and_the_file() {
     let err = reach_err(&["--urdf", empty.to_str().unwrap(), "--package", &meshes]);
     check(&err, &empty, &["link 'link1'", "empty.stl", "empty"]);
 
+    std::fs::write(d.join("link1.ply"), b"ply\n").unwrap();
+    let ply = variant(d, "ply.urdf", "../../meshes/arm/link1.stl", "link1.ply");
+    let err = reach_err(&["--urdf", ply.to_str().unwrap(), "--package", &meshes]);
+    check(
+        &err,
+        &ply,
+        &[
+            "link 'link1'",
+            "link1.ply",
+            "unknown file extension \"ply\" (expected .stl, .obj or .dae)",
+        ],
+    );
+
     std::fs::write(d.join("none.stl"), b"solid none\nendsolid none\n").unwrap();
     let none = variant(d, "none.urdf", "../../meshes/arm/link5.dae", "none.stl");
     let err = reach_err(&["--urdf", none.to_str().unwrap(), "--package", &meshes]);

@@ -529,15 +529,21 @@ pub fn load_hull(
     path: &Path,
     scale: [f64; 3],
 ) -> std::result::Result<(SharedShape, usize), String> {
+    let extension = path.extension().and_then(|e| e.to_str()).unwrap_or("");
+    if !["stl", "obj", "dae"]
+        .iter()
+        .any(|e| extension.eq_ignore_ascii_case(e))
+    {
+        return Err(format!(
+            "unknown file extension \"{extension}\" (expected .stl, .obj or .dae)"
+        ));
+    }
     let bytes = crate::limits::read_file(path, crate::limits::MAX_MESH_FILE_BYTES)
         .map_err(|e| format!("cannot read: {e}"))?;
     if bytes.is_empty() {
         return Err("empty file".into());
     }
-    let collada = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("dae"));
+    let collada = extension.eq_ignore_ascii_case("dae");
     if collada {
         let text = String::from_utf8_lossy(&bytes);
         crate::limits::check_xml_depth(&text, crate::limits::MAX_MESH_XML_DEPTH)?;
