@@ -688,3 +688,57 @@ fn long_values_in_errors_are_shortened() {
     let stderr = rejected(&check(&p), &["long.toml", "links", "characters]"]);
     assert!(stderr.len() < 600, "{} bytes: {stderr}", stderr.len());
 }
+
+/// A URDF the parser refuses for a bad number or shape is placed: element, attribute, value and
+/// line (the parser said only "invalid float literal").
+#[test]
+fn urdf_parse_faults_name_element_attribute_and_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let ur5 = std::fs::read_to_string(repo("examples/robots/ur5.urdf")).unwrap();
+    let cell = repo("examples/scenarios/ur5-cell.toml");
+    // The line of `needle` in `text` (found mid-line: the lines before it and its own).
+    let at = |text: &str, needle: &str| text[..text.find(needle).unwrap()].lines().count();
+    let radius = ur5.find("radius=\"").unwrap();
+    let axis = ur5.replacen("<axis xyz=\"0 0 1\"", "<axis xyz=\"0 1\"", 1);
+    let sphere = "<sphere radius=\"0.05\"/>";
+    let geometry = ur5.find("<geometry>").unwrap() + "<geometry>".len();
+    for (name, text, parts) in [
+        (
+            "radius.urdf",
+            format!("{}radius=\"abc{}", &ur5[..radius], &ur5[radius + 8..]),
+            vec![
+                format!("line {}", at(&ur5, "radius=\"")),
+                "is not a number".into(),
+            ],
+        ),
+        (
+            "axis.urdf",
+            axis.clone(),
+            vec![
+                format!(
+                    "line {}: <axis xyz=\"0 1\">",
+                    at(&axis, "<axis xyz=\"0 1\"")
+                ),
+                "2 numbers, expected 3".into(),
+            ],
+        ),
+        (
+            "shapes.urdf",
+            format!("{}{sphere}{}", &ur5[..geometry], &ur5[geometry..]),
+            vec!["holds 2 shapes".into(), "it must hold exactly one".into()],
+        ),
+    ] {
+        let p = write(dir.path(), name, &text);
+        let mut all: Vec<&str> = vec![name, "not a valid URDF"];
+        all.extend(parts.iter().map(String::as_str));
+        rejected(
+            &[
+                "reach".as_ref(),
+                cell.as_os_str(),
+                "--urdf".as_ref(),
+                p.as_os_str(),
+            ],
+            &all,
+        );
+    }
+}

@@ -112,8 +112,87 @@ pub fn read_urdf(path: &Path) -> Result<urdf_rs::Robot> {
     })?;
     urdf_rs::read_from_string(&text).map_err(|e| Error::Parse {
         file: path.to_path_buf(),
-        message: format!("not a valid URDF: {e}"),
+        message: format!(
+            "not a valid URDF: {}",
+            locate_fault(&text).unwrap_or_else(|| e.to_string())
+        ),
     })
+}
+
+/// Numeric attributes of URDF elements, with how many numbers each holds (0: one number).
+const NUMERIC: [(&str, &str, usize); 22] = [
+    ("origin", "xyz", 3),
+    ("origin", "rpy", 3),
+    ("axis", "xyz", 3),
+    ("box", "size", 3),
+    ("mesh", "scale", 3),
+    ("cylinder", "radius", 0),
+    ("cylinder", "length", 0),
+    ("capsule", "radius", 0),
+    ("capsule", "length", 0),
+    ("sphere", "radius", 0),
+    ("limit", "lower", 0),
+    ("limit", "upper", 0),
+    ("limit", "effort", 0),
+    ("limit", "velocity", 0),
+    ("mass", "value", 0),
+    ("inertia", "ixx", 0),
+    ("inertia", "ixy", 0),
+    ("inertia", "ixz", 0),
+    ("inertia", "iyy", 0),
+    ("inertia", "iyz", 0),
+    ("inertia", "izz", 0),
+    ("color", "rgba", 4),
+];
+
+/// Where a URDF that the parser refused goes wrong, when it is one of the common faults the
+/// parser's own message does not place: a number attribute that is not a number or has the
+/// wrong count of numbers, or a `<geometry>` without exactly one shape. `None` when none is
+/// found (the parser's message is then shown).
+fn locate_fault(text: &str) -> Option<String> {
+    let doc = roxmltree::Document::parse(text).ok()?;
+    let line = |n: roxmltree::Node| doc.text_pos_at(n.range().start).row;
+    for node in doc.descendants().filter(|n| n.is_element()) {
+        let tag = node.tag_name().name();
+        for &(element, attr, count) in &NUMERIC {
+            if tag != element {
+                continue;
+            }
+            let Some(value) = node.attribute(attr) else {
+                continue;
+            };
+            let words: Vec<&str> = value.split_whitespace().collect();
+            // The line is found only for the fault (each lookup scans the text).
+            let at = || format!("line {}: <{tag} {attr}=\"{value}\">", line(node));
+            if let Some(bad) = words.iter().find(|w| w.parse::<f64>().is_err()) {
+                return Some(format!("{}: \"{bad}\" is not a number", at()));
+            }
+            let expected = count.max(1);
+            if words.len() != expected {
+                return Some(format!(
+                    "{}: {} numbers, expected {expected}",
+                    at(),
+                    words.len()
+                ));
+            }
+        }
+        if tag == "geometry" {
+            let shapes: Vec<&str> = node
+                .children()
+                .filter(|c| c.is_element())
+                .map(|c| c.tag_name().name())
+                .collect();
+            if shapes.len() != 1 {
+                return Some(format!(
+                    "line {}: <geometry> holds {} shapes ({}); it must hold exactly one",
+                    line(node),
+                    shapes.len(),
+                    shapes.join(", ")
+                ));
+            }
+        }
+    }
+    None
 }
 
 /// [`read_urdf`] then [`chain_from_urdf`]; every error names the file.
