@@ -742,3 +742,24 @@ fn urdf_parse_faults_name_element_attribute_and_line() {
         );
     }
 }
+
+/// A `best.json` whose planner settings hold a value of the wrong type names its field.
+#[test]
+fn best_json_planner_faults_name_the_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let best = format!(
+        r#"{{"design": {}, "seed": 1, "stream": 0, "planner": {{"max_iterations": 0.5}}}}"#,
+        design("0.3", "[-1, 1]", 2)
+    );
+    let p = write(dir.path(), "best.json", &best);
+    let cell = repo("examples/scenarios/paper-2d.toml");
+    rejected(
+        &[
+            "reach".as_ref(),
+            cell.as_os_str(),
+            "--design".as_ref(),
+            p.as_os_str(),
+        ],
+        &["best.json: planner.max_iterations: invalid type: floating point `0.5`"],
+    );
+}

@@ -212,6 +212,25 @@ fn a_checkpoint_state_of_the_wrong_length_is_an_error_not_a_panic() {
         &resume(&out, &[]),
         &["checkpoint.json", "planner.l_max = -1"],
     );
+    // A value of the wrong type is named by its path, in the checkpoint and in its state.
+    let original = c.clone();
+    c["planner"]["l_max"] = serde_json::json!(std::f64::consts::FRAC_PI_4);
+    c["generation"] = serde_json::json!(1.5);
+    std::fs::write(&path, serde_json::to_string(&c).unwrap()).unwrap();
+    one_line_error(
+        &resume(&out, &[]),
+        &["checkpoint.json: generation: invalid type: floating point `1.5`"],
+    );
+    c["generation"] = original["generation"].clone();
+    c["state"]["population"][2]["x"][1] = serde_json::json!({});
+    std::fs::write(&path, serde_json::to_string(&c).unwrap()).unwrap();
+    one_line_error(
+        &resume(&out, &[]),
+        &[
+            "checkpoint.json",
+            "state.population[2].x[1]: invalid type: map",
+        ],
+    );
 }
 
 #[test]

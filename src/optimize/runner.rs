@@ -327,7 +327,10 @@ impl Replay {
         let mut planner = planner.clone();
         clamping_unless_recorded(&mut planner);
         let planner: crate::planning::PlannerConfig =
-            serde_json::from_value(planner).map_err(|e| parse("planner", e))?;
+            from_value_at(planner).map_err(|m| Error::Parse {
+                file: path.to_path_buf(),
+                message: format!("planner{m}"),
+            })?;
         check_planner(&planner).map_err(|e| e.in_file(path))?;
         Ok(Some(Replay {
             seed: serde_json::from_value(seed.clone()).map_err(|e| parse("seed", e))?,
@@ -375,6 +378,21 @@ pub(crate) fn initial_designs(space: &crate::design::DesignSpace) -> Vec<Vec<f64
         .collect()
 }
 
+/// Deserialises `value`; a failure's message starts with the path of the value at fault
+/// (`.population[5].x[2]: invalid type: map, expected f64`), or with `: ` for the whole value.
+fn from_value_at<T: serde::de::DeserializeOwned>(
+    value: serde_json::Value,
+) -> std::result::Result<T, String> {
+    serde_path_to_error::deserialize(value).map_err(|e| {
+        let path = e.path().to_string();
+        if path == "." {
+            format!(": {}", e.inner())
+        } else {
+            format!(".{path}: {}", e.inner())
+        }
+    })
+}
+
 /// Restores the optimiser of a checkpoint and checks its state against the design space's
 /// dimension `dim`. Errors name the state's field.
 fn load_optimizer(
@@ -382,14 +400,14 @@ fn load_optimizer(
     state: serde_json::Value,
     dim: usize,
 ) -> Result<Box<dyn Optimizer>> {
-    let bad = |e: serde_json::Error| Error::Parse {
+    let bad = |m: String| Error::Parse {
         file: PathBuf::new(),
-        message: format!("state: {e}"),
+        message: format!("state{m}"),
     };
     let optimizer: Box<dyn Optimizer> = match algorithm {
-        Algorithm::Ga => Box::new(Ga::load(state).map_err(bad)?),
-        Algorithm::Pso => Box::new(Pso::load(state).map_err(bad)?),
-        Algorithm::Asa => Box::new(Asa::load(state).map_err(bad)?),
+        Algorithm::Ga => Box::new(from_value_at::<Ga>(state).map_err(bad)?),
+        Algorithm::Pso => Box::new(from_value_at::<Pso>(state).map_err(bad)?),
+        Algorithm::Asa => Box::new(from_value_at::<Asa>(state).map_err(bad)?),
     };
     optimizer.validate(dim).map_err(|m| Error::Parse {
         file: PathBuf::new(),
@@ -541,7 +559,10 @@ impl<'a> Runner<'a> {
         if let Some(planner) = v.get_mut("planner") {
             clamping_unless_recorded(planner);
         }
-        let c: Checkpoint = serde_json::from_value(v).map_err(parse)?;
+        let c: Checkpoint = from_value_at(v).map_err(|m| Error::Parse {
+            file: path.clone(),
+            message: m.trim_start_matches(['.', ':', ' ']).to_string(),
+        })?;
         c.planner.validate().map_err(|e| e.in_file(&path))?;
         Ok(c)
     }
