@@ -70,6 +70,44 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     Ok(())
 }
 
+/// Checks, before any work, that `path` can take an output file: it is not a directory and
+/// its folder exists. A command that writes several files checks them all first, so that a
+/// bad location fails it before anything is written.
+pub fn check_output_file(path: &Path) -> Result<()> {
+    let refuse = |kind, why: &str| {
+        Err(Error::Write {
+            path: path.to_path_buf(),
+            source: std::io::Error::new(kind, why.to_string()),
+        })
+    };
+    if path.is_dir() {
+        return refuse(std::io::ErrorKind::IsADirectory, "is a directory");
+    }
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        return refuse(std::io::ErrorKind::NotFound, "its folder does not exist");
+    }
+    Ok(())
+}
+
+/// Checks, before any work, that `path` can take an output folder: it does not exist as
+/// anything but a folder.
+pub fn check_output_dir(path: &Path) -> Result<()> {
+    if path.exists() && !path.is_dir() {
+        return Err(Error::Write {
+            path: path.to_path_buf(),
+            source: std::io::Error::new(
+                std::io::ErrorKind::AlreadyExists,
+                "exists and is not a folder",
+            ),
+        });
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

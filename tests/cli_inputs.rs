@@ -566,7 +566,7 @@ fn urdf_output_never_overwritten_by_its_own_srdf() {
     let out = dir.path().join("r.urdf");
     let a = urdf(&out);
     let a: Vec<&OsStr> = a.iter().map(|s| s.as_os_str()).collect();
-    rejected(&a, &["r.urdf", "r.srdf", "is a directory"]);
+    rejected(&a, &["r.srdf", "is a directory"]);
     assert!(!out.exists(), "no URDF may be left without its SRDF");
     // The usual case writes both.
     let ok = dir.path().join("ok.urdf");
@@ -761,5 +761,37 @@ fn best_json_planner_faults_name_the_field() {
             p.as_os_str(),
         ],
         &["best.json: planner.max_iterations: invalid type: floating point `0.5`"],
+    );
+}
+
+/// `reach` checks its output locations before planning: a `--trajectories` path that is a file
+/// fails it before the `--json` report is written, and a `--json` path in a missing folder too.
+#[test]
+fn reach_checks_its_outputs_before_writing_any() {
+    let dir = tempfile::tempdir().unwrap();
+    let cell = repo("examples/scenarios/paper-2d.toml");
+    let report = dir.path().join("r.json");
+    let file = write(dir.path(), "t", "a file");
+    rejected(
+        &[
+            "reach".as_ref(),
+            cell.as_os_str(),
+            "--json".as_ref(),
+            report.as_os_str(),
+            "--trajectories".as_ref(),
+            file.as_os_str(),
+        ],
+        &["t: cannot write: exists and is not a folder"],
+    );
+    assert!(!report.exists(), "no report may be written");
+    let nowhere = dir.path().join("no/such/folder/r.json");
+    rejected(
+        &[
+            "reach".as_ref(),
+            cell.as_os_str(),
+            "--json".as_ref(),
+            nowhere.as_os_str(),
+        ],
+        &["r.json: cannot write: its folder does not exist"],
     );
 }

@@ -56,6 +56,13 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         urdf,
     } = args;
     use rayon::prelude::*;
+    // Output locations are checked first: nothing is written when one of them is bad.
+    if let Some(path) = &json {
+        kinsynth::io::check_output_file(path)?;
+    }
+    if let Some(dir) = &urdf.trajectories {
+        kinsynth::io::check_output_dir(dir)?;
+    }
     let s = Scenario::load(&file)?;
     let max_seeds = kinsynth::optimize::runner::MAX_SEEDS as u64;
     let seeds = whole("--seeds", seeds, 1, max_seeds)?;

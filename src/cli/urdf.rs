@@ -41,14 +41,10 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
             "the URDF must not end in .srdf (the SRDF is written beside it under that name)",
         ));
     }
-    if srdf.is_dir() {
-        // Refused before anything is written, so that no URDF is left without its SRDF.
-        return Err(kinsynth::Error::invalid(
-            "-o",
-            output.display(),
-            format!("its SRDF {} is a directory", srdf.display()),
-        ));
-    }
+    // Both locations are checked before anything is written, so that no URDF is left without
+    // its SRDF.
+    kinsynth::io::check_output_file(&output)?;
+    kinsynth::io::check_output_file(&srdf)?;
     kinsynth::export::write_urdf(&d, &output)?;
     kinsynth::export::write_srdf(&d, &config, &srdf)?;
     say!(
