@@ -795,3 +795,24 @@ fn reach_checks_its_outputs_before_writing_any() {
         &["r.json: cannot write: its folder does not exist"],
     );
 }
+
+/// A table header of 128 dotted keys passes the reader's recursion limit; the error says what
+/// that limit is about (the reader said only "recursion limit").
+#[test]
+fn deep_dotted_header_names_the_limit() {
+    let dir = tempfile::tempdir().unwrap();
+    let header = vec!["a"; 128].join(".");
+    let p = write(
+        dir.path(),
+        "deep.toml",
+        &format!("{ROBOT}{TASK}\n[{header}]\nx = 1\n"),
+    );
+    rejected(
+        &check(&p),
+        &[
+            "deep.toml",
+            "recursion limit",
+            "nested deeper than the TOML reader allows",
+        ],
+    );
+}

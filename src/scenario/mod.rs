@@ -244,7 +244,16 @@ impl Scenario {
             if let Some(p) = path.filter(|p| p != ".") {
                 m.push_str(&format!("{p}: "));
             }
-            m.push_str(&e.message().replace('\n', " "));
+            let message = e.message().replace('\n', " ");
+            if message.trim() == "recursion limit" && e.span().is_none() {
+                // The parser names neither the place nor the cause.
+                m.push_str(
+                    "recursion limit: a table header, dotted key or value is nested deeper than \
+                     the TOML reader allows",
+                );
+            } else {
+                m.push_str(&message);
+            }
             parse_error(m.trim_end().to_string())
         };
         let de = toml::de::Deserializer::parse(text).map_err(|e| describe(None, &e))?;
