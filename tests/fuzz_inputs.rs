@@ -652,7 +652,7 @@ fn regression_urdf_vector_split_by_a_line_break_gives_one_line() {
         .unwrap_err()
         .to_string();
     assert_one_line("urdf", 0, "regression", &e, &p);
-    assert!(e.contains("expected 3 found 4"), "{e}");
+    assert!(e.contains("4 numbers, expected 3"), "{e}");
 }
 
 /// A URDF robot whose link `link3_dh` has the collision cylinder `line` (the bundled UR5, with

@@ -231,6 +231,17 @@ fn a_checkpoint_state_of_the_wrong_length_is_an_error_not_a_panic() {
             "state.population[2].x[1]: invalid type: map",
         ],
     );
+    // Impossible values are refused, not carried into the history.
+    c["state"]["population"][2]["x"][1] = original["state"]["population"][2]["x"][1].clone();
+    c["state"]["population"][2]["cost"] = serde_json::json!(-1e308);
+    std::fs::write(&path, serde_json::to_string(&c).unwrap()).unwrap();
+    one_line_error(
+        &resume(&out, &[]),
+        &[
+            "checkpoint.json",
+            "state.population[2].cost = -1e308: must be finite and not negative",
+        ],
+    );
 }
 
 #[test]

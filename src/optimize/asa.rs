@@ -17,8 +17,8 @@
 //! acceptance temperature restarts from the best cost's scale.
 
 use super::{
-    best_distinct, check_len, check_points, evaluate_batch, keep_best, random_point, Evaluated,
-    Optimizer, StepContext, StepReport,
+    best_distinct, check_evaluated, check_len, check_points, evaluate_batch, keep_best,
+    random_point, Evaluated, Optimizer, StepContext, StepReport,
 };
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
@@ -266,7 +266,7 @@ impl Optimizer for Asa {
     fn validate(&self, dim: usize) -> Result<(), String> {
         check_points(&self.seeds, self.best.as_ref(), dim)?;
         if let Some(c) = &self.current {
-            check_len("current.x", &c.x, dim)?;
+            check_evaluated("current", c, dim)?;
             check_len("k", &self.k, dim)?;
             check_len("t0", &self.t0, dim)?;
             if self.best.is_none() {

@@ -3,8 +3,8 @@
 //! sets a variable to zero, and elitism.
 
 use super::{
-    best_distinct, check_len, check_points, evaluate_batch, keep_best, random_point, Evaluated,
-    Optimizer, StepContext, StepReport,
+    best_distinct, check_evaluated, check_points, evaluate_batch, keep_best, random_point,
+    Evaluated, Optimizer, StepContext, StepReport,
 };
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
@@ -243,7 +243,7 @@ impl Optimizer for Ga {
     fn validate(&self, dim: usize) -> Result<(), String> {
         check_points(&self.seeds, self.best.as_ref(), dim)?;
         for (i, e) in self.population.iter().enumerate() {
-            check_len(&format!("population[{i}].x"), &e.x, dim)?;
+            check_evaluated(&format!("population[{i}]"), e, dim)?;
         }
         if !self.population.is_empty() && self.best.is_none() {
             return Err("best is missing while the population is not empty".into());

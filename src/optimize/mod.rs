@@ -151,6 +151,27 @@ pub(crate) fn check_len(field: &str, v: &[f64], dim: usize) -> Result<(), String
     Ok(())
 }
 
+/// Checks an evaluated point of a restored state: `dim` finite values, a finite cost that is not
+/// negative (paper Eq. 23 sums non-negative terms), and `R` and the progress within [0, 1].
+pub(crate) fn check_evaluated(field: &str, e: &Evaluated, dim: usize) -> Result<(), String> {
+    check_len(&format!("{field}.x"), &e.x, dim)?;
+    if !(e.cost.is_finite() && e.cost >= 0.0) {
+        return Err(format!(
+            "{field}.cost = {}: must be finite and not negative",
+            crate::error::Num(e.cost)
+        ));
+    }
+    for (name, v) in [("reachability", e.reachability), ("progress", e.progress)] {
+        if !(0.0..=1.0).contains(&v) {
+            return Err(format!(
+                "{field}.{name} = {}: must lie in [0, 1]",
+                crate::error::Num(v)
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Checks an optional incumbent and the seed points of a restored state.
 pub(crate) fn check_points(
     seeds: &[Vec<f64>],
@@ -161,7 +182,7 @@ pub(crate) fn check_points(
         check_len(&format!("seeds[{i}]"), x, dim)?;
     }
     if let Some(b) = best {
-        check_len("best.x", &b.x, dim)?;
+        check_evaluated("best", b, dim)?;
     }
     Ok(())
 }

@@ -9,8 +9,8 @@
 //! * `global`: the classic swarm, pulled toward its own best and the swarm's best.
 
 use super::{
-    best_distinct, check_len, check_points, evaluate_batch, keep_best, random_point, Evaluated,
-    Optimizer, StepContext, StepReport,
+    best_distinct, check_evaluated, check_len, check_points, evaluate_batch, keep_best,
+    random_point, Evaluated, Optimizer, StepContext, StepReport,
 };
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
@@ -306,7 +306,7 @@ impl Optimizer for Pso {
         for (i, p) in self.particles.iter().enumerate() {
             check_len(&format!("particles[{i}].x"), &p.x, dim)?;
             check_len(&format!("particles[{i}].v"), &p.v, dim)?;
-            check_len(&format!("particles[{i}].best.x"), &p.best.x, dim)?;
+            check_evaluated(&format!("particles[{i}].best"), &p.best, dim)?;
             if !p.exemplar.is_empty() && p.exemplar.len() != dim {
                 return Err(format!(
                     "particles[{i}].exemplar has {} values, the design space {dim}",
