@@ -313,11 +313,16 @@ pub fn load_reach(path: &Path, tasks: &[nalgebra::Point3<f64>], dof: usize) -> R
             ));
         }
         for (j, q) in path.points.iter().enumerate() {
-            if q.len() != dof || !q.iter().all(|v| v.is_finite()) {
+            // No axis range reaches beyond ±1000 (rad or m, `crate::limits`).
+            let limit = crate::limits::MAX_ANGLE.max(crate::limits::MAX_LENGTH);
+            if q.len() != dof || !q.iter().all(|v| v.is_finite() && v.abs() <= limit) {
                 return Err(bad(
                     format!("targets[{i}].path.points[{j}]"),
-                    format!("{q:?}"),
-                    format!("must be {dof} finite joint values (the robot has {dof} joints)"),
+                    crate::error::fmt_list(q),
+                    format!(
+                        "must be {dof} joint values (the robot has {dof} joints), each within \
+                         ±{limit}"
+                    ),
                 ));
             }
         }
