@@ -341,22 +341,22 @@ fn huge_scenario_values_are_refused_naming_field_and_value() {
     rejected(&check(&p), &["planner.max_iterations", "1000000000"]);
     // The iteration limit is 100,000: the nearest-node scan makes a run's time grow with the
     // square of its iterations.
-    for (n, ok) in [(100_000, true), (100_001, false)] {
-        let p = write(
-            dir.path(),
-            "s.toml",
-            &format!("{ROBOT}\n[planner]\nmax_iterations = {n}\n{TASK}"),
-        );
-        let (code, stderr) = run(&check(&p));
-        if ok {
-            assert_eq!(code, Some(0), "{stderr}");
-        } else {
-            rejected(
-                &check(&p),
-                &["planner.max_iterations", "100001", "1..=100000"],
-            );
-        }
-    }
+    at_the_limit(
+        dir.path(),
+        100_000,
+        |n| format!("{ROBOT}\n[planner]\nmax_iterations = {n}\n{TASK}"),
+        &["planner.max_iterations", "100001", "1..=100000"],
+    );
+}
+
+/// The scenario `text(limit)` passes `check` and `text(limit + 1)` fails it with one line that
+/// contains `parts`.
+fn at_the_limit(dir: &Path, limit: usize, text: impl Fn(usize) -> String, parts: &[&str]) {
+    let p = write(dir, "s.toml", &text(limit));
+    let (code, stderr) = run(&check(&p));
+    assert_eq!(code, Some(0), "{stderr}");
+    let p = write(dir, "s.toml", &text(limit + 1));
+    rejected(&check(&p), parts);
 }
 
 #[test]
@@ -660,22 +660,12 @@ fn iteration_limit_shrinks_with_the_axes() {
             rejected(&check(&p), &all);
         }
     }
-    for (n, ok) in [(100_000, true), (100_001, false)] {
-        let p = write(
-            dir.path(),
-            "s.toml",
-            &format!("{ROBOT}self_collision_samples = {n}\n{TASK}"),
-        );
-        if ok {
-            let (code, stderr) = run(&check(&p));
-            assert_eq!(code, Some(0), "{stderr}");
-        } else {
-            rejected(
-                &check(&p),
-                &["robot.self_collision_samples", "100001", "at most 100000"],
-            );
-        }
-    }
+    at_the_limit(
+        dir.path(),
+        100_000,
+        |n| format!("{ROBOT}self_collision_samples = {n}\n{TASK}"),
+        &["robot.self_collision_samples", "100001", "at most 100000"],
+    );
 }
 
 /// A long value quoted in an error keeps its ends only: a 1,000,000-character string where a

@@ -92,47 +92,40 @@ fn a_reach_report_of_another_robot_or_scenario_is_a_one_line_error() {
         assert!(err.contains(message), "{name} {extra:?}: {err}");
         assert!(!page.exists(), "nothing is written");
     }
+    // `view` of the edited report `v` fails with one line that contains `needles`, writing
+    // nothing.
+    let refused = |v: &serde_json::Value, needles: &[&str]| {
+        std::fs::write(&reach, v.to_string()).unwrap();
+        let o = kinsynth(&[
+            "view".as_ref(),
+            scenario("ur5-cell").as_os_str(),
+            "--reach".as_ref(),
+            reach.as_os_str(),
+            "-o".as_ref(),
+            page.as_os_str(),
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success());
+        assert_eq!(err.lines().count(), 1, "{err}");
+        for n in needles {
+            assert!(err.contains(n), "`{n}` missing from {err}");
+        }
+        assert!(!page.exists());
+    };
     // A report whose task points differ from the scenario's.
     let text = std::fs::read_to_string(&reach).unwrap();
-    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
-    v["targets"][2]["point"][0] = 9.5.into();
-    std::fs::write(&reach, v.to_string()).unwrap();
-    let o = kinsynth(&[
-        "view".as_ref(),
-        scenario("ur5-cell").as_os_str(),
-        "--reach".as_ref(),
-        reach.as_os_str(),
-        "-o".as_ref(),
-        page.as_os_str(),
-    ]);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success());
-    assert!(err.contains("reach.json: targets[2].point = [9.5"), "{err}");
-    assert!(!page.exists());
-    // A joint value beyond any axis range (finite, but no robot reaches it).
     let original: serde_json::Value = serde_json::from_str(&text).unwrap();
-    v["targets"][2]["point"] = original["targets"][2]["point"].clone();
+    let mut v = original.clone();
+    v["targets"][2]["point"][0] = 9.5.into();
+    refused(&v, &["reach.json: targets[2].point = [9.5"]);
+    // A joint value beyond any axis range (finite, but no robot reaches it).
+    let mut v = original.clone();
     let reached = (0..4)
         .find(|&i| v["targets"][i]["path"].is_object())
         .expect("a reached task");
     v["targets"][reached]["path"]["points"][0][0] = (-1e308).into();
-    std::fs::write(&reach, v.to_string()).unwrap();
-    let o = kinsynth(&[
-        "view".as_ref(),
-        scenario("ur5-cell").as_os_str(),
-        "--reach".as_ref(),
-        reach.as_os_str(),
-        "-o".as_ref(),
-        page.as_os_str(),
-    ]);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success());
-    assert!(
-        err.contains(&format!("targets[{reached}].path.points[0] = [-1e308"))
-            && err.contains("each within ±1000"),
-        "{err}"
-    );
-    assert!(!page.exists());
+    let at = format!("targets[{reached}].path.points[0] = [-1e308");
+    refused(&v, &[&at, "each within ±1000"]);
 }
 
 /// `reach --tree` adds the planner's tree and changes nothing else; the tree is one tree rooted
