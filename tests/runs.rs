@@ -572,3 +572,28 @@ fn confirmation_runs_keep_a_lucky_planner_run_from_scoring_r_1() {
     assert_ne!(e.stream, 0, "the run that fell short is the one to replay");
     assert_eq!(lucky.plan_once(&x, e.stream, 0.0).0, e.report);
 }
+
+/// An output name taken by a folder (or the trajectories folder by a file) fails the run before
+/// it starts: found after the run, it left the results written before it beside the failure.
+#[test]
+fn output_names_taken_by_the_wrong_kind_fail_the_run_before_it_starts() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, folder) in [("report.html", true), ("trajectories", false)] {
+        let out = dir.path().join(format!("run-{name}"));
+        std::fs::create_dir_all(&out).unwrap();
+        if folder {
+            std::fs::create_dir(out.join(name)).unwrap();
+        } else {
+            std::fs::write(out.join(name), "a file").unwrap();
+        }
+        let o = optimize(&paper_2d(), &out, &["--evaluations", "32"])
+            .output()
+            .unwrap();
+        one_line_error(&o, &[name, "cannot write"]);
+        assert!(!out.join("best.json").exists(), "nothing may be written");
+        assert!(
+            !out.join("checkpoint.json").exists(),
+            "nothing may be written"
+        );
+    }
+}

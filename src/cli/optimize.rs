@@ -279,6 +279,26 @@ pub fn prepare(args: &Args) -> Result<Prepared, kinsynth::Error> {
         );
     }
     let _ = LOCK_PATH.set(lock.path().to_path_buf());
+    // The run's output names must take files (and a folder): found wrong only after the run,
+    // the results written before them would be left beside a failure.
+    {
+        use kinsynth::optimize::output::files;
+        for name in [
+            files::BEST,
+            files::TIME,
+            files::HISTORY,
+            files::REACH,
+            files::PLOT,
+            files::CHECKPOINT,
+            files::URDF,
+            files::SRDF,
+            files::REPORT,
+            files::ISLANDS,
+        ] {
+            kinsynth::io::check_output_file(&out.join(name))?;
+        }
+        kinsynth::io::check_output_dir(&out.join(files::TRAJECTORIES))?;
+    }
     // Read again under the lock: the state the last run left.
     let checkpoint = match &resume {
         Some(dir) => Some(Runner::read_checkpoint(dir)?),
