@@ -713,6 +713,14 @@ fn urdf_parse_faults_name_element_attribute_and_line() {
             ],
         ),
         (
+            "syntax.urdf",
+            ur5.replacen(" iyz=\"0\" izz=", " iyz=\"0\"(izz=", 1),
+            vec![format!(
+                "expected a whitespace not '(' at {}:",
+                at(&ur5, " iyz=\"0\" izz=")
+            )],
+        ),
+        (
             "shapes.urdf",
             format!("{}{sphere}{}", &ur5[..geometry], &ur5[geometry..]),
             vec!["holds 2 shapes".into(), "it must hold exactly one".into()],
@@ -784,6 +792,19 @@ fn reach_checks_its_outputs_before_writing_any() {
         ],
         &["r.json: cannot write: its folder does not exist"],
     );
+    let same = dir.path().join("same");
+    rejected(
+        &[
+            "reach".as_ref(),
+            cell.as_os_str(),
+            "--json".as_ref(),
+            same.as_os_str(),
+            "--trajectories".as_ref(),
+            same.as_os_str(),
+        ],
+        &["--trajectories", "is also the --json report"],
+    );
+    assert!(!same.exists(), "nothing may be written");
 }
 
 /// A table header of 128 dotted keys passes the reader's recursion limit; the error says what

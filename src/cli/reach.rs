@@ -62,6 +62,13 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
     }
     if let Some(dir) = &urdf.trajectories {
         kinsynth::io::check_output_dir(dir)?;
+        if json.as_ref() == Some(dir) {
+            return Err(kinsynth::Error::invalid(
+                "--trajectories",
+                dir.display(),
+                "is also the --json report",
+            ));
+        }
     }
     let s = Scenario::load(&file)?;
     let max_seeds = kinsynth::optimize::runner::MAX_SEEDS as u64;

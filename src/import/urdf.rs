@@ -146,11 +146,15 @@ const NUMERIC: [(&str, &str, usize); 22] = [
 ];
 
 /// Where a URDF that the parser refused goes wrong, when it is one of the common faults the
-/// parser's own message does not place: a number attribute that is not a number or has the
-/// wrong count of numbers, or a `<geometry>` without exactly one shape. `None` when none is
-/// found (the parser's message is then shown).
+/// parser's own message does not place: malformed XML (with its line and column), a number
+/// attribute that is not a number or has the wrong count of numbers, or a `<geometry>` without
+/// exactly one shape. `None` when none is found (the parser's message is then shown).
 fn locate_fault(text: &str) -> Option<String> {
-    let doc = roxmltree::Document::parse(text).ok()?;
+    let doc = match roxmltree::Document::parse(text) {
+        Ok(doc) => doc,
+        // Malformed XML: the XML reader's message has the true line and column.
+        Err(e) => return Some(e.to_string()),
+    };
     let line = |n: roxmltree::Node| doc.text_pos_at(n.range().start).row;
     for node in doc.descendants().filter(|n| n.is_element()) {
         let tag = node.tag_name().name();

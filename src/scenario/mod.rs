@@ -18,7 +18,7 @@ use crate::error::{fmt_list, Error, Num, Result};
 use crate::kinematics::{Axis, Placement, Range};
 use crate::limits::{
     within, MAX_ANGLE, MAX_COLLIDERS_PER_LINK, MAX_LENGTH, MAX_LINKS, MAX_OBSTACLES,
-    MAX_POPULATION, MAX_SCENE_MESH_TRIANGLES, MAX_SETTING, MAX_TASKS,
+    MAX_POPULATION, MAX_SETTING, MAX_TASKS,
 };
 use crate::world::{Contact, MeshCache, Obstacle, ObstacleShape, TaskOrientation, Workspace};
 use nalgebra::Point3;
@@ -578,25 +578,11 @@ impl Scenario {
         check_count(spec.obstacle.len(), 0, MAX_OBSTACLES, "obstacle")?;
         check_count(spec.task.len(), 0, MAX_TASKS, "task")?;
         let mut obstacles = Vec::with_capacity(spec.obstacle.len());
-        let mut mesh_triangles = 0usize;
-        // A mesh placed many times is read and converted once.
+        // A mesh placed many times is read and converted once; the cache also keeps the
+        // scenario's mesh budgets (triangles, decomposition work).
         let mut meshes = MeshCache::new();
         for (k, o) in spec.obstacle.iter().enumerate() {
-            let built = meshes.len();
             let obstacle = Self::obstacle(k, o, dir, &mut meshes)?;
-            // Only a newly built mesh adds triangles: copies share its shape.
-            if meshes.len() > built {
-                mesh_triangles += obstacle.mesh_triangles();
-            }
-            check(
-                mesh_triangles <= MAX_SCENE_MESH_TRIANGLES,
-                format!("obstacle[{k}].file"),
-                o.file.as_deref().unwrap_or(""),
-                &format!(
-                    "the distinct meshes up to here have {mesh_triangles} triangles, more than \
-                     the limit of {MAX_SCENE_MESH_TRIANGLES} for a scenario"
-                ),
-            )?;
             obstacles.push(obstacle);
         }
         let mut tasks = Vec::with_capacity(spec.task.len());

@@ -450,6 +450,12 @@ impl MeshData {
         SharedShape::convex_hull(&points)
     }
 
+    /// The voxel–triangle tests the voxelization of [`MeshData::to_convex_decomposition`]
+    /// makes (at most [`MAX_DECOMPOSITION_TESTS`] are allowed).
+    pub fn voxel_tests(&self) -> u64 {
+        voxel_tests(&self.vertices, &self.triangles, DECOMPOSITION_RESOLUTION)
+    }
+
     /// An approximate convex decomposition of the mesh (V-HACD), as a parry
     /// compound of convex polyhedra.
     ///

@@ -16,9 +16,16 @@ pub const MESH_PROGRESS_BYTES: u64 = 32 << 20;
 /// The shapes built from mesh files while loading one workspace, shared by every obstacle that
 /// uses the same file with the same representation and scale: a cell that places one part many
 /// times reads, converts and stores it once (parry's [`SharedShape`] is reference-counted).
+///
+/// It also keeps the scenario's budgets, checked when a mesh has been read and before it is
+/// converted: the triangles of the distinct meshes ([`crate::limits::MAX_SCENE_MESH_TRIANGLES`])
+/// and the voxel–triangle tests of their decompositions
+/// ([`crate::world::mesh::MAX_DECOMPOSITION_TESTS`]).
 #[derive(Debug, Default)]
 pub struct MeshCache {
     built: std::collections::HashMap<MeshKey, (SharedShape, usize)>,
+    triangles: usize,
+    voxel_tests: u64,
 }
 
 /// What a built mesh shape depends on: the file, the representation and the scale (its bits).
@@ -38,6 +45,31 @@ impl MeshCache {
     /// True when no mesh shape has been built.
     pub fn is_empty(&self) -> bool {
         self.built.is_empty()
+    }
+
+    /// Counts a mesh about to be built, of `triangles` triangles and `tests` voxel–triangle
+    /// tests of decomposition (0 for other representations), against the scenario's budgets;
+    /// the reason when it would exceed one.
+    fn charge(&mut self, triangles: usize, tests: u64) -> std::result::Result<(), String> {
+        let total = self.triangles.saturating_add(triangles);
+        let limit = crate::limits::MAX_SCENE_MESH_TRIANGLES;
+        if total > limit {
+            return Err(format!(
+                "the distinct meshes up to here have {total} triangles, more than the limit of \
+                 {limit} for a scenario"
+            ));
+        }
+        let all_tests = self.voxel_tests.saturating_add(tests);
+        let limit = crate::world::mesh::MAX_DECOMPOSITION_TESTS;
+        if all_tests > limit {
+            return Err(format!(
+                "the decompositions up to here need {all_tests} voxel-triangle tests, more than \
+                 the limit of {limit} for a scenario (large triangles across a mesh make the \
+                 decomposition slow): use `hull` or `trimesh`, or remesh into smaller triangles"
+            ));
+        }
+        (self.triangles, self.voxel_tests) = (total, all_tests);
+        Ok(())
     }
 }
 
@@ -248,6 +280,11 @@ impl ObstacleShape {
                     }
                 }
                 triangles = mesh.triangles.len();
+                let tests = match representation {
+                    MeshRepresentation::Decomposition => mesh.voxel_tests(),
+                    _ => 0,
+                };
+                cache.charge(triangles, tests).map_err(bad)?;
                 let shape = match representation {
                     MeshRepresentation::Hull => mesh
                         .to_convex_hull()
@@ -394,6 +431,29 @@ impl Obstacle {
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn mesh_budgets_are_kept_across_a_scenario() {
+        let mut cache = MeshCache::new();
+        let (triangles, tests) = (crate::limits::MAX_SCENE_MESH_TRIANGLES, 40_000_000);
+        // Two decompositions of 30M tests each: the second exceeds the scenario's 40M.
+        cache.charge(1_000, 30_000_000).unwrap();
+        let e = cache.charge(1_000, 30_000_000).unwrap_err();
+        assert!(e.contains("need 60000000 voxel-triangle tests"), "{e}");
+        assert!(
+            e.contains(&format!("limit of {tests} for a scenario")),
+            "{e}"
+        );
+        // A refused mesh is not counted; meshes of other kinds cost no tests.
+        cache.charge(1_000, 10_000_000).unwrap();
+        cache.charge(triangles - 2_000, 0).unwrap();
+        let e = cache.charge(1, 0).unwrap_err();
+        assert!(
+            e.contains(&format!("have {} triangles", triangles + 1)),
+            "{e}"
+        );
+    }
+
     use super::*;
     use approx::assert_relative_eq;
 
