@@ -431,6 +431,8 @@ impl Obstacle {
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
 
     #[test]
     fn mesh_budgets_are_kept_across_a_scenario() {
@@ -453,9 +455,6 @@ mod tests {
             "{e}"
         );
     }
-
-    use super::*;
-    use approx::assert_relative_eq;
 
     #[test]
     fn sphere_queries_match_closed_form() {
