@@ -83,6 +83,12 @@ pub fn check_output_file(path: &Path) -> Result<()> {
     if path.is_dir() {
         return refuse(std::io::ErrorKind::IsADirectory, "is a directory");
     }
+    if path.as_os_str().as_encoded_bytes().last() == Some(&b'/') {
+        return refuse(
+            std::io::ErrorKind::InvalidInput,
+            "names a folder (it ends with /), not a file",
+        );
+    }
     let dir = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),

@@ -792,6 +792,16 @@ fn reach_checks_its_outputs_before_writing_any() {
         ],
         &["r.json: cannot write: its folder does not exist"],
     );
+    let slash = format!("{}/u/", dir.path().display());
+    rejected(
+        &[
+            "reach".as_ref(),
+            cell.as_os_str(),
+            "--json".as_ref(),
+            slash.as_ref(),
+        ],
+        &["u/: cannot write: names a folder (it ends with /), not a file"],
+    );
     let same = dir.path().join("same");
     rejected(
         &[
