@@ -47,10 +47,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
                 .map_err(write_err);
         }
     }
-    let dir = match target.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
+    let dir = folder_of(target);
     let mut tmp = tempfile::Builder::new()
         .prefix(".kinsynth-")
         .suffix(".tmp")
@@ -68,6 +65,14 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     }
     tmp.persist(target).map_err(|e| write_err(e.error))?;
     Ok(())
+}
+
+/// The folder a file `path` lies in (`.` for a bare name).
+fn folder_of(path: &Path) -> &Path {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    }
 }
 
 /// Checks, before any work, that `path` can take an output file: it is not a directory and
@@ -89,11 +94,7 @@ pub fn check_output_file(path: &Path) -> Result<()> {
             "names a folder (it ends with /), not a file",
         );
     }
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    if !dir.is_dir() {
+    if !folder_of(path).is_dir() {
         return refuse(std::io::ErrorKind::NotFound, "its folder does not exist");
     }
     Ok(())

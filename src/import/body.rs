@@ -27,7 +27,7 @@ use crate::error::{Error, Num, Result};
 use crate::export::urdf::isometry_of;
 use crate::kinematics::Chain;
 use crate::limits::{within, MAX_ANGLE, MAX_LENGTH, MAX_SETTING};
-use crate::world::mesh::{hull_candidates, support_polytope, EXACT_HULL_POINTS, SUPPORT_PLANES};
+use crate::world::mesh::hull_of_points;
 use nalgebra::{IsometryMatrix3, Point3, Rotation3, Translation3, Vector3};
 use parry3d_f64::shape::SharedShape;
 use std::path::{Path, PathBuf};
@@ -579,18 +579,10 @@ pub fn load_hull(
         return Err("the mesh has no triangles".into());
     }
     let n = points.len();
-    // As a scene's `hull` obstacle: the distinct points that can lie on the hull, and for a
-    // finely tessellated surface the polytope of its supporting planes (the exact hull of 15M
-    // points on a sphere took 22 s and 3 GB).
-    let candidates = hull_candidates(&points);
-    let hull = if candidates.len() > EXACT_HULL_POINTS {
-        support_polytope(&candidates, SUPPORT_PLANES)
-            .and_then(|v| SharedShape::convex_hull(&v))
-            .or_else(|| SharedShape::convex_hull(&candidates))
-    } else {
-        SharedShape::convex_hull(&candidates)
-    };
-    hull.map(|h| (h, n))
+    // As a scene's `hull` obstacle (the exact hull of 15M points on a sphere took 22 s and
+    // 3 GB).
+    hull_of_points(&points)
+        .map(|h| (h, n))
         .ok_or_else(|| "the mesh is flat or degenerate: it has no convex hull".into())
 }
 

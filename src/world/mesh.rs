@@ -441,13 +441,7 @@ impl MeshData {
     /// a million triangles takes well under a second either way (`benches/hull.rs`).
     pub fn to_convex_hull(&self) -> Option<SharedShape> {
         self.validate().ok()?;
-        let points = hull_candidates(&self.vertices);
-        if points.len() > EXACT_HULL_POINTS {
-            if let Some(vertices) = support_polytope(&points, SUPPORT_PLANES) {
-                return SharedShape::convex_hull(&vertices);
-            }
-        }
-        SharedShape::convex_hull(&points)
+        hull_of_points(&self.vertices)
     }
 
     /// The voxel–triangle tests the voxelization of [`MeshData::to_convex_decomposition`]
@@ -467,7 +461,7 @@ impl MeshData {
     /// than the voxels.
     pub fn to_convex_decomposition(&self) -> Result<SharedShape, ShapeError> {
         self.validate()?;
-        let tests = voxel_tests(&self.vertices, &self.triangles, DECOMPOSITION_RESOLUTION);
+        let tests = self.voxel_tests();
         if tests > MAX_DECOMPOSITION_TESTS {
             return Err(ShapeError::DecompositionTooCostly { tests });
         }
@@ -497,6 +491,22 @@ impl MeshData {
             .map(|&v| Vector::from_array(v))
             .collect()
     }
+}
+
+/// The convex hull of `vertices` (all finite), as [`MeshData::to_convex_hull`] builds it: the
+/// exact hull of the [`hull_candidates`], or beyond [`EXACT_HULL_POINTS`] of them their
+/// [`support_polytope`] (the exact hull again when that fails). `None` when parry finds no hull
+/// (flat or degenerate points).
+pub fn hull_of_points(vertices: &[[f64; 3]]) -> Option<SharedShape> {
+    let points = hull_candidates(vertices);
+    if points.len() > EXACT_HULL_POINTS {
+        if let Some(hull) =
+            support_polytope(&points, SUPPORT_PLANES).and_then(|v| SharedShape::convex_hull(&v))
+        {
+            return Some(hull);
+        }
+    }
+    SharedShape::convex_hull(&points)
 }
 
 /// Most candidate points for which [`MeshData::to_convex_hull`] computes the exact hull;
