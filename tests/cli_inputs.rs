@@ -817,6 +817,29 @@ fn reach_checks_its_outputs_before_writing_any() {
     assert!(!same.exists(), "nothing may be written");
 }
 
+#[test]
+fn a_trajectory_name_taken_by_a_folder_fails_before_any_file_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let cell = repo("examples/scenarios/paper-2d.toml");
+    let report = dir.path().join("r.json");
+    let traj = dir.path().join("traj");
+    std::fs::create_dir_all(traj.join("task_3.csv")).unwrap();
+    rejected(
+        &[
+            "reach".as_ref(),
+            cell.as_os_str(),
+            "--json".as_ref(),
+            report.as_os_str(),
+            "--trajectories".as_ref(),
+            traj.as_os_str(),
+        ],
+        &["task_3.csv: cannot write: is a directory"],
+    );
+    assert!(!report.exists(), "no report may be written");
+    let left: Vec<_> = std::fs::read_dir(&traj).unwrap().collect();
+    assert_eq!(left.len(), 1, "only the folder in the way stays: {left:?}");
+}
+
 /// A table header of 128 dotted keys passes the reader's recursion limit; the error says what
 /// that limit is about (the reader said only "recursion limit").
 #[test]

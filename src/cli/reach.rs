@@ -88,6 +88,10 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
             None => (s.space.largest().chain(), None, None),
         },
     };
+    if let Some(dir) = &urdf.trajectories {
+        // A file name in the folder taken by a folder fails here, before any work.
+        kinsynth::export::trajectory::check_trajectory_files(dir, 0..s.workspace.tasks.len())?;
+    }
     let mut planner = replay
         .as_ref()
         .map_or_else(|| s.planner.clone(), |r| r.planner.clone());

@@ -172,6 +172,30 @@ impl Trajectory {
     }
 }
 
+/// The two files of task `index`'s trajectory in `dir`: `task_{index}.csv` and
+/// `task_{index}.json`.
+pub fn trajectory_files(dir: &Path, index: usize) -> [PathBuf; 2] {
+    [
+        dir.join(format!("task_{index}.csv")),
+        dir.join(format!("task_{index}.json")),
+    ]
+}
+
+/// Checks, before any work, that the trajectory files of the tasks `indices` can be written in
+/// `dir` ([`crate::io::check_output_file`] for each; `dir` itself may not exist yet).
+pub fn check_trajectory_files(dir: &Path, indices: impl IntoIterator<Item = usize>) -> Result<()> {
+    crate::io::check_output_dir(dir)?;
+    if !dir.is_dir() {
+        return Ok(()); // created empty: nothing in it can be in the way
+    }
+    for i in indices {
+        for f in trajectory_files(dir, i) {
+            crate::io::check_output_file(&f)?;
+        }
+    }
+    Ok(())
+}
+
 /// Writes `task_{index}.csv` and `task_{index}.json` into `dir` (created if missing) for every
 /// reached task of `report`, atomically; returns the files written.
 pub fn write_trajectories(report: &ReachReport, dir: &Path) -> Result<Vec<PathBuf>> {
@@ -179,13 +203,14 @@ pub fn write_trajectories(report: &ReachReport, dir: &Path) -> Result<Vec<PathBu
         path: dir.to_path_buf(),
         source,
     })?;
+    // Every name is checked before the first file is written: nothing half-written.
+    check_trajectory_files(dir, report.targets.iter().map(|t| t.index))?;
     let mut written = Vec::new();
     for t in &report.targets {
         let Some(path) = &t.path else { continue };
         let traj = Trajectory::from_path(path);
-        let csv = dir.join(format!("task_{}.csv", t.index));
+        let [csv, json] = trajectory_files(dir, t.index);
         crate::io::write_atomic(&csv, traj.to_csv().as_bytes())?;
-        let json = dir.join(format!("task_{}.json", t.index));
         crate::io::write_atomic(&json, traj.to_json().as_bytes())?;
         written.push(csv);
         written.push(json);
