@@ -725,6 +725,47 @@ fn urdf_parse_faults_name_element_attribute_and_line() {
             format!("{}{sphere}{}", &ur5[..geometry], &ur5[geometry..]),
             vec!["holds 2 shapes".into(), "it must hold exactly one".into()],
         ),
+        (
+            "unnamed.urdf",
+            ur5.replacen("<joint name=\"j1_rz\"", "<joint", 1),
+            vec![
+                format!("line {}: <joint>", at(&ur5, "<joint name=\"j1_rz\"")),
+                "has no name=\"…\" attribute; it is required".into(),
+            ],
+        ),
+        (
+            "parentless.urdf",
+            ur5.replacen("<parent link=", "<parent lnk=", 1),
+            vec![
+                format!("line {}: <parent>", at(&ur5, "<parent link=")),
+                "has no link=\"…\" attribute".into(),
+            ],
+        ),
+        (
+            "spinny.urdf",
+            ur5.replacen("type=\"revolute\"", "type=\"spinny\"", 1),
+            vec![
+                format!("line {}: <joint name=", at(&ur5, "type=\"revolute\"")),
+                "unknown variant `spinny`".into(),
+            ],
+        ),
+        (
+            "cone.urdf",
+            ur5.replacen("<cylinder", "<cone", 1),
+            vec![
+                format!("line {}: <geometry>", at(&ur5, "<cylinder") - 1),
+                "unknown variant `cone`".into(),
+            ],
+        ),
+        (
+            "twice.urdf",
+            format!(
+                "{}<origin/>{}",
+                &ur5[..geometry - 10],
+                &ur5[geometry - 10..]
+            ),
+            vec!["holds 2 <origin> elements; at most one is allowed".into()],
+        ),
     ] {
         let p = write(dir.path(), name, &text);
         let mut all: Vec<&str> = vec![name, "not a valid URDF"];

@@ -114,7 +114,7 @@ pub fn read_urdf(path: &Path) -> Result<urdf_rs::Robot> {
         file: path.to_path_buf(),
         message: format!(
             "not a valid URDF: {}",
-            locate_fault(&text).unwrap_or_else(|| e.to_string())
+            locate_fault(&text, &e.to_string()).unwrap_or_else(|| e.to_string())
         ),
     })
 }
@@ -149,7 +149,7 @@ const NUMERIC: [(&str, &str, usize); 22] = [
 /// parser's own message does not place: malformed XML (with its line and column), a number
 /// attribute that is not a number or has the wrong count of numbers, or a `<geometry>` without
 /// exactly one shape. `None` when none is found (the parser's message is then shown).
-fn locate_fault(text: &str) -> Option<String> {
+fn locate_fault(text: &str, message: &str) -> Option<String> {
     let doc = match roxmltree::Document::parse(text) {
         Ok(doc) => doc,
         // Malformed XML: the XML reader's message has the true line and column.
@@ -193,6 +193,163 @@ fn locate_fault(text: &str) -> Option<String> {
                     shapes.len(),
                     shapes.join(", ")
                 ));
+            }
+        }
+    }
+    locate_schema_fault(&doc, message)
+}
+
+/// The URDF elements the parser reads, as `parent/element` (the root is `<robot>`), with their
+/// required attributes, required child elements, and child elements allowed at most once.
+/// Elements elsewhere (such as `<gazebo>` extensions) are not read, so not checked.
+#[allow(clippy::type_complexity)]
+const SCHEMA: [(&str, &[&str], &[&str], &[&str]); 29] = [
+    ("robot/link", &["name"], &[], &["inertial"]),
+    (
+        "robot/joint",
+        &["name", "type"],
+        &["parent", "child"],
+        &[
+            "origin",
+            "parent",
+            "child",
+            "axis",
+            "limit",
+            "calibration",
+            "dynamics",
+            "mimic",
+            "safety_controller",
+        ],
+    ),
+    ("robot/material", &["name"], &[], &["color", "texture"]),
+    ("material/color", &["rgba"], &[], &[]),
+    ("material/texture", &["filename"], &[], &[]),
+    (
+        "link/inertial",
+        &[],
+        &["mass", "inertia"],
+        &["origin", "mass", "inertia"],
+    ),
+    ("inertial/origin", &[], &[], &[]),
+    ("inertial/mass", &["value"], &[], &[]),
+    (
+        "inertial/inertia",
+        &["ixx", "ixy", "ixz", "iyy", "iyz", "izz"],
+        &[],
+        &[],
+    ),
+    (
+        "link/visual",
+        &[],
+        &["geometry"],
+        &["origin", "geometry", "material"],
+    ),
+    (
+        "link/collision",
+        &[],
+        &["geometry"],
+        &["origin", "geometry"],
+    ),
+    ("visual/origin", &[], &[], &[]),
+    ("collision/origin", &[], &[], &[]),
+    ("visual/geometry", &[], &[], &[]),
+    ("collision/geometry", &[], &[], &[]),
+    ("visual/material", &[], &[], &["color", "texture"]),
+    ("geometry/box", &["size"], &[], &[]),
+    ("geometry/cylinder", &["radius", "length"], &[], &[]),
+    ("geometry/capsule", &["radius", "length"], &[], &[]),
+    ("geometry/sphere", &["radius"], &[], &[]),
+    ("geometry/mesh", &["filename"], &[], &[]),
+    ("joint/origin", &[], &[], &[]),
+    ("joint/parent", &["link"], &[], &[]),
+    ("joint/child", &["link"], &[], &[]),
+    ("joint/axis", &["xyz"], &[], &[]),
+    ("joint/limit", &["velocity"], &[], &[]),
+    ("joint/mimic", &["joint"], &[], &[]),
+    ("joint/safety_controller", &["k_velocity"], &[], &[]),
+    ("joint/calibration", &[], &[], &[]),
+];
+
+/// The schema entry of an element the parser reads (every ancestor read too), if any.
+#[allow(clippy::type_complexity)]
+fn schema_of(
+    node: roxmltree::Node,
+) -> Option<&'static (
+    &'static str,
+    &'static [&'static str],
+    &'static [&'static str],
+    &'static [&'static str],
+)> {
+    let parent = node.parent_element()?;
+    let key = format!("{}/{}", parent.tag_name().name(), node.tag_name().name());
+    let entry = SCHEMA.iter().find(|e| e.0 == key)?;
+    if parent.tag_name().name() == "robot" {
+        return parent.parent_element().is_none().then_some(entry);
+    }
+    schema_of(parent).map(|_| entry)
+}
+
+/// Places the parser's "missing field", "duplicate field" and "unknown variant" faults (whose
+/// messages have no line) on the first element read by the parser that has them.
+fn locate_schema_fault(doc: &roxmltree::Document, message: &str) -> Option<String> {
+    let quoted = |key: &str| -> Option<String> {
+        let rest = &message[message.find(key)? + key.len()..];
+        let rest = rest.strip_prefix('`')?;
+        Some(rest[..rest.find('`')?].to_string())
+    };
+    let said = message.trim_start_matches("custom: ");
+    let name_of = |n: roxmltree::Node| match n.attribute("name") {
+        Some(v) => format!(
+            "<{} name=\"{}\">",
+            n.tag_name().name(),
+            crate::error::shorten(v)
+        ),
+        None => format!("<{}>", n.tag_name().name()),
+    };
+    let line = |n: roxmltree::Node| doc.text_pos_at(n.range().start).row;
+    let children = |n: roxmltree::Node, tag: &str| {
+        n.children()
+            .filter(|c| c.is_element() && c.tag_name().name() == tag)
+            .count()
+    };
+    let read = doc
+        .descendants()
+        .filter(|n| n.is_element())
+        .filter_map(|n| schema_of(n).map(|e| (n, e)));
+    if let Some(field) = quoted("missing field ") {
+        for (n, (_, attrs, required, _)) in read {
+            if attrs.contains(&field.as_str()) && n.attribute(field.as_str()).is_none() {
+                return Some(format!(
+                    "line {}: {} has no {field}=\"…\" attribute; it is required",
+                    line(n),
+                    name_of(n)
+                ));
+            }
+            if required.contains(&field.as_str()) && children(n, &field) == 0 {
+                return Some(format!(
+                    "line {}: {} has no <{field}> element; it is required",
+                    line(n),
+                    name_of(n)
+                ));
+            }
+        }
+    } else if let Some(field) = quoted("duplicate field ") {
+        for (n, (_, _, _, single)) in read {
+            let count = children(n, &field);
+            if single.contains(&field.as_str()) && count > 1 {
+                return Some(format!(
+                    "line {}: {} holds {count} <{field}> elements; at most one is allowed",
+                    line(n),
+                    name_of(n)
+                ));
+            }
+        }
+    } else if let Some(value) = quoted("unknown variant ") {
+        for (n, (key, _, _, _)) in read {
+            let joint_type = *key == "robot/joint" && n.attribute("type") == Some(value.as_str());
+            let shape = key.ends_with("/geometry") && children(n, &value) > 0;
+            if joint_type || shape {
+                return Some(format!("line {}: {}: {said}", line(n), name_of(n)));
             }
         }
     }
