@@ -867,6 +867,83 @@ fn regression_deeply_nested_srdf_and_collada_give_one_line() {
     assert!(e.contains("deep.dae") && e.contains("no triangles"), "{e}");
 }
 
+/// A COLLADA file of one triangle, valid as written; faults the COLLADA reader panics on are
+/// put into it one at a time.
+const TRIANGLE_DAE: &str = r##"<?xml version="1.0"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+<library_geometries><geometry id="g"><mesh>
+<source id="p"><float_array id="pa" count="9">0 0 0 1 0 0 0 1 0</float_array>
+<technique_common><accessor source="#pa" count="3" stride="3"><param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/></accessor></technique_common></source>
+<vertices id="v"><input semantic="POSITION" source="#p"/></vertices>
+<triangles count="1"><input semantic="VERTEX" source="#v" offset="0"/><p>0 1 2</p></triangles>
+</mesh></geometry></library_geometries>
+<library_visual_scenes><visual_scene id="s"><node><instance_geometry url="#g"/></node></visual_scene></library_visual_scenes>
+<scene><instance_visual_scene url="#s"/></scene>
+</COLLADA>
+"##;
+
+#[test]
+fn collada_faults_the_reader_panics_on_are_named() {
+    // Each of these made the COLLADA reader panic; the error said only that it failed.
+    let dir = tempfile::tempdir().unwrap();
+    let robot = one_link_robot(dir.path(), "m.dae");
+    let load = |text: &str| {
+        std::fs::write(dir.path().join("m.dae"), text).unwrap();
+        let options = kinsynth::import::ImportOptions::default();
+        kinsynth::import::load_robot(&robot, None, None, None, 4, &options).map(|_| ())
+    };
+    load(TRIANGLE_DAE).expect("the unmutated file is read");
+    for (from, to, expected) in [
+        (
+            r##"<input semantic="VERTEX" source="#v""##,
+            r##"<input semantic="VERTEX" source="#zz""##,
+            r##"<input source="#zz">: no element has that id"##,
+        ),
+        (
+            r##"<input semantic="POSITION" source="#p""##,
+            r##"<input semantic="POSITION" source="#pa""##,
+            r##"<input source="#pa">: names a <float_array>, expected a <source>"##,
+        ),
+        (
+            r##"<input semantic="VERTEX" source="#v""##,
+            r##"<input semantic="VERTEX" source="#p""##,
+            "expected the <vertices> of its own <mesh>",
+        ),
+        (
+            r##"accessor source="#pa""##,
+            r##"accessor source="#g""##,
+            "names a <geometry>, expected an array",
+        ),
+        (
+            r##"stride="3""##,
+            r##"stride="0""##,
+            r##"<accessor stride="0">: the stride must be at least 1"##,
+        ),
+        (
+            r##"name="Y" type="float""##,
+            r##"name="Y" type="int""##,
+            r##"<source id="p"> (POSITION): needs an <accessor> of stride 3 or more"##,
+        ),
+        (
+            r##"count="3" stride="3""##,
+            r##"count="4" stride="3""##,
+            "its accessor reads 4 × 3 values, its array holds 9",
+        ),
+        (
+            "<p>0 1 2</p>",
+            "<p>0 1 3</p>",
+            "<triangles>: vertex index 3, but its <vertices> has 3 positions",
+        ),
+    ] {
+        assert!(TRIANGLE_DAE.contains(from), "{from}");
+        let e = load(&TRIANGLE_DAE.replacen(from, to, 1))
+            .unwrap_err()
+            .to_string();
+        assert_one_line("collada", 0, to, &e, &robot);
+        assert!(e.contains("m.dae") && e.contains(expected), "{to}: {e}");
+    }
+}
+
 #[test]
 fn mutated_reach_reports() {
     // A reachability report with paths and the planner's tree, as `view --reach` reads it.
@@ -998,7 +1075,7 @@ fn regression_collada_sizes_and_name_arrays_are_checked_before_reading() {
         ),
         (
             &[("source=\"#link2-positions\"", "source=\"#nowhere\"")],
-            "not a readable mesh",
+            "<input source=\"#nowhere\">: no element has that id",
         ),
         (
             &[("offset=\"0\"", "offset=\"-1\"")],

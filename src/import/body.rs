@@ -409,8 +409,11 @@ pub fn resolve_mesh(
 /// Checks what the mesh reader trusts in a COLLADA file before it reads it: every size it
 /// reserves memory for must fit in the text that holds the values (an array's `count`, a
 /// primitive's `count` times its vertices and inputs against its `<p>` indices, input offsets
-/// at most `MAX_OFFSET`), and a mesh source holds numbers (the reader never ends on a `<Name_array>` or
-/// `<IDREF_array>` with values there). Anything else is left to the reader.
+/// at most `MAX_OFFSET`), and a mesh source holds numbers (the reader never ends on a
+/// `<Name_array>` or `<IDREF_array>` with values there). And what the reader panics on: every
+/// `source="#id"` in a geometry names an element of the kind it expects, an accessor's stride
+/// is not 0, positions and normals are three floats per vertex within their array, and every
+/// vertex index names a position. Anything else is left to the reader.
 fn check_collada(text: &str) -> std::result::Result<(), String> {
     /// Largest `<input offset>` of a primitive (real files use a handful of inputs).
     const MAX_OFFSET: u64 = 1024;
@@ -497,13 +500,148 @@ fn check_collada(text: &str) -> std::result::Result<(), String> {
             ));
         }
     }
+    // References inside the geometries resolve to the kind of element the reader expects,
+    // accessors step forward, and positions and normals are three floats (the reader panics
+    // on each of these instead of returning an error).
+    // The number of positions of each <vertices> (by node).
+    let mut positions: std::collections::HashMap<roxmltree::NodeId, u64> = Default::default();
+    let ids: std::collections::HashMap<&str, roxmltree::Node> = doc
+        .descendants()
+        .filter_map(|n| Some((n.attribute("id")?, n)))
+        .collect();
+    for n in geometries.descendants().filter(|n| n.is_element()) {
+        let name = n.tag_name().name();
+        if name == "accessor" && n.attribute("stride").is_some() && number(n, "stride")? == 0 {
+            return Err("<accessor stride=\"0\">: the stride must be at least 1".into());
+        }
+        let Some(id) = n.attribute("source").and_then(|s| s.strip_prefix('#')) else {
+            continue;
+        };
+        let said = || format!("<{name} source=\"#{}\">", crate::error::shorten(id));
+        let Some(target) = ids.get(id) else {
+            return Err(format!("{}: no element has that id", said()));
+        };
+        let kind = target.tag_name().name();
+        let semantic = n.attribute("semantic").unwrap_or("");
+        let parent = n.parent_element().map_or("", |p| p.tag_name().name());
+        let expected = match (name, parent, semantic) {
+            ("accessor", _, _) if !kind.ends_with("_array") => "an array such as <float_array>",
+            ("input", "vertices", _) if kind != "source" => "a <source>",
+            ("input", _, "VERTEX") => {
+                // The primitive's own mesh's <vertices>.
+                let own = n
+                    .parent_element()
+                    .and_then(|p| p.parent_element())
+                    .and_then(|m| m.children().find(|c| c.has_tag_name("vertices")));
+                if own.is_some_and(|v| v == *target) {
+                    continue;
+                }
+                "the <vertices> of its own <mesh>"
+            }
+            ("input", _, _) if parent != "vertices" && kind != "source" => "a <source>",
+            _ => "",
+        };
+        if !expected.is_empty() {
+            return Err(format!("{}: names a <{kind}>, expected {expected}", said()));
+        }
+        if name == "input" && matches!(semantic, "POSITION" | "NORMAL") {
+            // The reader takes X, Y, Z floats from a <float_array> and nothing else.
+            let accessor = target.descendants().find(|c| c.has_tag_name("accessor"));
+            let three_floats = accessor.is_some_and(|a| {
+                let params: Vec<_> = a.children().filter(|c| c.has_tag_name("param")).collect();
+                let array = a
+                    .attribute("source")
+                    .and_then(|s| s.strip_prefix('#'))
+                    .and_then(|s| ids.get(s));
+                params.len() >= 3
+                    && params.iter().all(|p| p.attribute("type") == Some("float"))
+                    && a.attribute("stride")
+                        .and_then(|s| s.trim().parse::<u64>().ok())
+                        .unwrap_or(1)
+                        >= 3
+                    && array.is_some_and(|x| x.has_tag_name("float_array"))
+            });
+            if !three_floats {
+                return Err(format!(
+                    "<source id=\"{}\"> ({semantic}): needs an <accessor> of stride 3 or more \
+                     with three <param type=\"float\"> over a <float_array>",
+                    crate::error::shorten(id)
+                ));
+            }
+            let accessor = accessor.expect("checked above");
+            let (count, stride) = (number(accessor, "count")?, number(accessor, "stride")?);
+            let array = accessor
+                .attribute("source")
+                .and_then(|s| ids.get(s.strip_prefix('#')?))
+                .expect("checked above");
+            let values = array
+                .text()
+                .map_or(0, |t| t.split_ascii_whitespace().count()) as u64;
+            if count.saturating_mul(stride) > values {
+                return Err(format!(
+                    "<source id=\"{}\"> ({semantic}): its accessor reads {count} × {stride} \
+                     values, its array holds {values}",
+                    crate::error::shorten(id)
+                ));
+            }
+            if semantic == "POSITION" && parent == "vertices" {
+                if let Some(v) = n.parent_element() {
+                    positions.insert(v.id(), count);
+                }
+            }
+        }
+    }
+    // Every vertex index of a primitive names one of its positions.
+    for n in geometries.descendants().filter(|n| n.is_element()) {
+        let name = n.tag_name().name();
+        if !matches!(
+            name,
+            "triangles"
+                | "lines"
+                | "polylist"
+                | "polygons"
+                | "trifans"
+                | "tristrips"
+                | "linestrips"
+        ) {
+            continue;
+        }
+        let mut stride = 1;
+        for c in n.children().filter(|c| c.has_tag_name("input")) {
+            stride = stride.max(number(c, "offset")? + 1);
+        }
+        let vertex = n
+            .children()
+            .find(|c| c.has_tag_name("input") && c.attribute("semantic") == Some("VERTEX"));
+        let target = vertex
+            .and_then(|v| v.attribute("source"))
+            .and_then(|s| ids.get(s.strip_prefix('#')?));
+        if let (Some(v), Some(t)) = (vertex, target) {
+            let offset = number(v, "offset")?;
+            let available = positions.get(&t.id()).copied().unwrap_or(0);
+            let lists = n.children().filter(|c| c.has_tag_name("p"));
+            let values = lists.flat_map(|p| p.text().unwrap_or("").split_ascii_whitespace());
+            for (k, x) in values.enumerate() {
+                if k as u64 % stride != offset {
+                    continue;
+                }
+                let index = x.parse::<u64>().unwrap_or(0);
+                if index >= available {
+                    return Err(format!(
+                        "<{name}>: vertex index {index}, but its <vertices> has {available} \
+                         positions"
+                    ));
+                }
+            }
+        }
+    }
     Ok(())
 }
 
-/// Runs `f` and returns its value, or `None` if it panicked, without printing the panic's
-/// message: for a third-party reader that panics on some malformed input instead of returning
-/// an error. Other panics, on any thread, are reported as before.
-fn catch_quietly<T>(f: impl FnOnce() -> T) -> Option<T> {
+/// Runs `f` and returns its value, or the panic's message (shortened) if it panicked, without
+/// printing it: for a third-party reader that panics on some malformed input instead of
+/// returning an error. Other panics, on any thread, are reported as before.
+fn catch_quietly<T>(f: impl FnOnce() -> T) -> std::result::Result<T, String> {
     use std::cell::Cell;
     thread_local! {
         static QUIET: Cell<bool> = const { Cell::new(false) };
@@ -520,7 +658,14 @@ fn catch_quietly<T>(f: impl FnOnce() -> T) -> Option<T> {
     let was = QUIET.with(|q| q.replace(true));
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f));
     QUIET.with(|q| q.set(was));
-    result.ok()
+    result.map_err(|payload| {
+        let said = payload
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| payload.downcast_ref::<String>().cloned())
+            .unwrap_or_default();
+        crate::error::shorten(said.lines().next().unwrap_or("").trim()).into_owned()
+    })
 }
 
 /// The convex hull of the mesh file `path` (STL, OBJ or COLLADA), each vertex scaled by
@@ -552,7 +697,10 @@ pub fn load_hull(
     // The COLLADA reader panics on some malformed files (a missing source, a short array)
     // instead of returning an error: such a panic is this file's error too.
     let scene = catch_quietly(|| mesh_loader::Loader::default().load_from_slice(&bytes, path))
-        .ok_or_else(|| "not a readable mesh: the mesh reader failed on it".to_string())?
+        .map_err(|why| match why.is_empty() {
+            true => "not a readable mesh: the mesh reader failed on it".to_string(),
+            false => format!("not a readable mesh: the mesh reader failed on it ({why})"),
+        })?
         .map_err(|e| format!("not a readable mesh: {e}"))?;
     let mut points: Vec<[f64; 3]> = Vec::new();
     for m in &scene.meshes {
