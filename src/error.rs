@@ -123,8 +123,19 @@ pub const MESSAGE_LENGTH: usize = 2_000;
 /// `text` short enough to read: every word longer than [`MESSAGE_WORD`] characters keeps its
 /// first 60 and last 20 with the number left out between them, and a message still longer than
 /// [`MESSAGE_LENGTH`] keeps its start (file and field) and its end (the reason). A 3 MB value in
-/// a scenario otherwise made a 3 MB error line.
+/// a scenario otherwise made a 3 MB error line. Control characters (a newline in a file name,
+/// say) are shown escaped, as `\n`, so that the text stays on one line.
 pub fn shorten(text: &str) -> std::borrow::Cow<'_, str> {
+    if text.chars().any(char::is_control) {
+        let mut escaped = String::with_capacity(text.len() + 8);
+        for c in text.chars() {
+            match c.is_control() {
+                true => escaped.extend(c.escape_default()),
+                false => escaped.push(c),
+            }
+        }
+        return std::borrow::Cow::Owned(shorten(&escaped).into_owned());
+    }
     let long = |w: &str| w.chars().count() > MESSAGE_WORD;
     if text.chars().count() <= MESSAGE_LENGTH && !text.split(' ').any(long) {
         return std::borrow::Cow::Borrowed(text);
@@ -236,5 +247,7 @@ mod tests {
             out.starts_with("f.json: x = ") && out.ends_with(": too long"),
             "{out}"
         );
+        let broken = "a\nb.toml\r\t: cannot read";
+        assert_eq!(shorten(broken), "a\\nb.toml\\r\\t: cannot read");
     }
 }

@@ -758,6 +758,22 @@ fn urdf_parse_faults_name_element_attribute_and_line() {
             ],
         ),
         (
+            "inertia.urdf",
+            ur5.replacen("ixx=\"0.000000001\"", "ixx=\"nan\"", 1),
+            vec![
+                format!("line {}: link 'base_link', <inertial>", at(&ur5, "ixx=")),
+                "<inertia ixx=\"nan\">: every value must be a finite number".into(),
+            ],
+        ),
+        (
+            "limit.urdf",
+            ur5.replacen("upper=\"", "upper=\"1e400", 1),
+            vec![
+                format!("line {}: joint '", at(&ur5, "upper=\"")),
+                "every value must be a finite number".into(),
+            ],
+        ),
+        (
             "twice.urdf",
             format!(
                 "{}<origin/>{}",
@@ -856,6 +872,23 @@ fn reach_checks_its_outputs_before_writing_any() {
         &["--trajectories", "is also the --json report"],
     );
     assert!(!same.exists(), "nothing may be written");
+}
+
+#[test]
+fn a_file_name_with_a_newline_gives_a_one_line_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let name = dir.path().join("cell\nnext.toml");
+    rejected(
+        &["check".as_ref(), name.as_os_str()],
+        &["cell\\nnext.toml: cannot read"],
+    );
+    // In a value read from a file too: a mesh named with a newline.
+    let cell = write(
+        dir.path(),
+        "c.toml",
+        &format!("{ROBOT}{TASK}\n[[obstacle]]\nshape = \"mesh\"\nfile = \"a\\nb.stl\"\nposition = [1.0, 1.0, 1.0]\n"),
+    );
+    rejected(&check(&cell), &["a\\nb.stl"]);
 }
 
 #[test]

@@ -688,14 +688,14 @@ fn regression_urdf_collision_values_are_checked() {
             "length=\"0.425\"",
             "length=\"nan\"",
             cylinder,
-            "<cylinder length=\"NaN\">",
+            "<cylinder length=\"nan\">: every value must be a finite number",
         ),
         (
             112,
             "xyz=\"0.2125 0 0\"",
             "xyz=\"nan 0 0\"",
             cylinder,
-            "<origin xyz=\"NaN 0 0\">",
+            "<origin xyz=\"nan 0 0\">: every value must be a finite number",
         ),
         (
             120,

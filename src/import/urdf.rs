@@ -110,13 +110,66 @@ pub fn read_urdf(path: &Path) -> Result<urdf_rs::Robot> {
             message,
         }
     })?;
-    urdf_rs::read_from_string(&text).map_err(|e| Error::Parse {
+    let robot = urdf_rs::read_from_string(&text).map_err(|e| Error::Parse {
         file: path.to_path_buf(),
         message: format!(
             "not a valid URDF: {}",
             locate_fault(&text, &e.to_string()).unwrap_or_else(|| e.to_string())
         ),
-    })
+    })?;
+    match non_finite(&text) {
+        Some(fault) => Err(Error::Parse {
+            file: path.to_path_buf(),
+            message: format!("not a valid URDF: {fault}"),
+        }),
+        None => Ok(robot),
+    }
+}
+
+/// The first number attribute ([`NUMERIC`]) of an element the parser reads whose value is not
+/// finite (the parser takes `nan`, `inf` and `1e400`), placed on its line.
+fn non_finite(text: &str) -> Option<String> {
+    let doc = roxmltree::Document::parse(text).ok()?;
+    for node in doc.descendants().filter(|n| n.is_element()) {
+        let tag = node.tag_name().name();
+        for &(element, attr, _) in &NUMERIC {
+            if tag != element || schema_of(node).is_none() {
+                continue;
+            }
+            let Some(value) = node.attribute(attr) else {
+                continue;
+            };
+            let finite = |w: &str| w.parse::<f64>().is_ok_and(f64::is_finite);
+            if !value.split_whitespace().all(finite) {
+                // The link or joint, and the visual or collision element, that hold it.
+                let mut within = String::new();
+                for a in node.ancestors().filter(|a| a.is_element()) {
+                    let name = a.attribute("name").map(crate::error::shorten);
+                    let part = match (a.tag_name().name(), name) {
+                        ("link" | "joint", Some(n)) => format!("{} '{n}'", a.tag_name().name()),
+                        ("visual" | "collision", Some(n)) => {
+                            format!("<{} name=\"{n}\">", a.tag_name().name())
+                        }
+                        ("visual" | "collision" | "inertial", None) => {
+                            format!("<{}>", a.tag_name().name())
+                        }
+                        _ => continue,
+                    };
+                    within = if within.is_empty() {
+                        part
+                    } else {
+                        format!("{part}, {within}")
+                    };
+                }
+                return Some(format!(
+                    "line {}: {within}: <{tag} {attr}=\"{}\">: every value must be a finite number",
+                    doc.text_pos_at(node.range().start).row,
+                    crate::error::shorten(value)
+                ));
+            }
+        }
+    }
+    None
 }
 
 /// Numeric attributes of URDF elements, with how many numbers each holds (0: one number).
@@ -203,7 +256,7 @@ fn locate_fault(text: &str, message: &str) -> Option<String> {
 /// required attributes, required child elements, and child elements allowed at most once.
 /// Elements elsewhere (such as `<gazebo>` extensions) are not read, so not checked.
 #[allow(clippy::type_complexity)]
-const SCHEMA: [(&str, &[&str], &[&str], &[&str]); 29] = [
+const SCHEMA: [(&str, &[&str], &[&str], &[&str]); 30] = [
     ("robot/link", &["name"], &[], &["inertial"]),
     (
         "robot/joint",
@@ -268,6 +321,7 @@ const SCHEMA: [(&str, &[&str], &[&str], &[&str]); 29] = [
     ("joint/mimic", &["joint"], &[], &[]),
     ("joint/safety_controller", &["k_velocity"], &[], &[]),
     ("joint/calibration", &[], &[], &[]),
+    ("joint/dynamics", &[], &[], &[]),
 ];
 
 /// The schema entry of an element the parser reads (every ancestor read too), if any.
