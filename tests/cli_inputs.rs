@@ -619,6 +619,24 @@ fn scene_mesh_limit_counts_distinct_meshes() {
             "5000000",
         ],
     );
+    // All meshes are counted before the first is built: a first mesh that cannot be built
+    // (its faces name a vertex it lacks) is not reached when the two are over the limit.
+    let mut broken = String::from("v 0 0 0\nv 1 0 0\n");
+    broken.push_str(&"f 1 2 3\nf 2 1 3\nf 1 3 2\nf 3 2 1\n".repeat(repeats));
+    write(dir.path(), "broken.obj", &broken);
+    let first = placed(0.1, 3.0).replace("tetra.obj", "broken.obj");
+    let p = write(
+        dir.path(),
+        "first.toml",
+        &format!("{ROBOT}{TASK}{first}{}", placed(0.1, 4.0)),
+    );
+    rejected(
+        &check(&p),
+        &["obstacle[1].file", "tetra.obj", "5200000 triangles"],
+    );
+    // Alone, the first is refused for what it is.
+    let p = write(dir.path(), "alone.toml", &format!("{ROBOT}{TASK}{first}"));
+    rejected(&check(&p), &["obstacle[0]", "broken.obj"]);
 }
 
 /// Iterations cost more on designs of many axes (the nearest-node search scans the tree):

@@ -825,6 +825,55 @@ pub fn load_mesh(path: &Path) -> Result<MeshData, MeshError> {
     Ok(mesh)
 }
 
+/// The number of triangles of the mesh file `path` as its reader will find them (for an OBJ,
+/// its faces fanned into triangles; for a binary STL, the header's count; for an ASCII STL, its
+/// `facet`s), counted without building anything: `None` when the file cannot be read or is
+/// neither STL nor OBJ (its reader reports why). A scenario's meshes are counted all together
+/// before the first is built ([`crate::limits::MAX_SCENE_MESH_TRIANGLES`]).
+pub fn count_triangles(path: &Path) -> Option<usize> {
+    let extension = path.extension()?.to_string_lossy().to_ascii_lowercase();
+    let bytes = crate::limits::read_file(path, crate::limits::MAX_MESH_FILE_BYTES).ok()?;
+    match extension.as_str() {
+        "obj" => Some(obj_counts(&bytes).0),
+        "stl" => {
+            let declared = bytes
+                .get(80..STL_BINARY_HEADER)
+                .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as usize);
+            let binary = declared.is_some_and(|n| {
+                STL_BINARY_HEADER as u64 + STL_BINARY_TRIANGLE * n as u64 == bytes.len() as u64
+            });
+            if !binary && solid_keyword_offset(&bytes).is_some() && !bytes.contains(&0) {
+                let facets = bytes.split(|&b| b == b'\n').filter(|line| {
+                    let mut words = line
+                        .split(|b| b.is_ascii_whitespace())
+                        .filter(|w| !w.is_empty());
+                    words.next() == Some(b"facet")
+                });
+                Some(facets.count())
+            } else {
+                declared
+            }
+        }
+        _ => None,
+    }
+}
+
+/// The numbers of triangles (faces fanned) and vertices of OBJ bytes, counted line by line.
+fn obj_counts(bytes: &[u8]) -> (usize, usize) {
+    let (mut triangles, mut vertices) = (0usize, 0usize);
+    for line in bytes.split(|&b| b == b'\n') {
+        let mut tokens = line
+            .split(|b| b.is_ascii_whitespace())
+            .filter(|t| !t.is_empty());
+        match tokens.next() {
+            Some(b"f") => triangles += tokens.count().saturating_sub(2),
+            Some(b"v") => vertices += 1,
+            _ => {}
+        }
+    }
+    (triangles, vertices)
+}
+
 /// Size of the header (80 bytes) plus triangle count (4 bytes) of binary STL.
 const STL_BINARY_HEADER: usize = 84;
 /// Size of one triangle record of binary STL.
@@ -986,17 +1035,7 @@ fn parse_obj(path: &Path, bytes: &[u8]) -> Result<MeshData, MeshError> {
     };
     // Count triangles and vertices before tobj builds them, so a small file of long polygons
     // cannot expand into gigabytes.
-    let (mut triangles, mut vertices) = (0usize, 0usize);
-    for line in bytes.split(|&b| b == b'\n') {
-        let mut tokens = line
-            .split(|b| b.is_ascii_whitespace())
-            .filter(|t| !t.is_empty());
-        match tokens.next() {
-            Some(b"f") => triangles += tokens.count().saturating_sub(2),
-            Some(b"v") => vertices += 1,
-            _ => {}
-        }
-    }
+    let (triangles, vertices) = obj_counts(bytes);
     let limit = crate::limits::MAX_MESH_TRIANGLES;
     if triangles > limit || vertices > limit {
         return Err(parse_error(format!(
