@@ -409,6 +409,26 @@ fn mesh_errors_name_the_urdf_the_link_and_the_file() {
     let err = reach_err(&["--urdf", none.to_str().unwrap(), "--package", &meshes]);
     check(&err, &none, &["link 'link5'", "none.stl", "no triangles"]);
 
+    // Points on a line have no hull; a flat mesh is a two-sided plate and is read.
+    std::fs::write(
+        d.join("line.obj"),
+        b"v 0 0 0\nv 0.1 0 0\nv 0.2 0 0\nf 1 2 3\n",
+    )
+    .unwrap();
+    let line = variant(d, "line.urdf", "../../meshes/arm/link5.dae", "line.obj");
+    let err = reach_err(&["--urdf", line.to_str().unwrap(), "--package", &meshes]);
+    check(
+        &err,
+        &line,
+        &["link 'link5'", "line.obj", "points lie on a line"],
+    );
+    let plate = b"v 0 0 0\nv 0.04 0 0\nv 0.04 0.04 0\nv 0 0.04 0\nf 1 2 3\nf 1 3 4\n";
+    std::fs::write(d.join("plate.obj"), plate).unwrap();
+    let plate = variant(d, "plate.urdf", "../../meshes/arm/link5.dae", "plate.obj");
+    let options = kinsynth::import::ImportOptions::default();
+    let robot = kinsynth::import::load_robot(&plate, None, None, None, 4, &options).unwrap();
+    assert!(!robot.body.is_empty());
+
     // Outside the repository no folder named `meshes` lies above the copy.
     let pkg = variant(
         d,

@@ -731,7 +731,7 @@ pub fn load_hull(
     // 3 GB).
     hull_of_points(&points)
         .map(|h| (h, n))
-        .ok_or_else(|| "the mesh is flat or degenerate: it has no convex hull".into())
+        .ok_or_else(|| "the mesh is degenerate (its points lie on a line or at one point): it has no convex hull".into())
 }
 
 /// Reads the `<disable_collisions link1 link2 reason/>` pairs of an SRDF file. Every link must

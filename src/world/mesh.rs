@@ -496,7 +496,7 @@ impl MeshData {
 /// The convex hull of `vertices` (all finite), as [`MeshData::to_convex_hull`] builds it: the
 /// exact hull of the [`hull_candidates`], or beyond [`EXACT_HULL_POINTS`] of them their
 /// [`support_polytope`] (the exact hull again when that fails). `None` when parry finds no hull
-/// (flat or degenerate points).
+/// (points on a line or at one point; flat points give a two-sided polygon).
 pub fn hull_of_points(vertices: &[[f64; 3]]) -> Option<SharedShape> {
     let points = hull_candidates(vertices);
     if points.len() > EXACT_HULL_POINTS {
