@@ -836,13 +836,8 @@ pub fn count_triangles(path: &Path) -> Option<usize> {
     match extension.as_str() {
         "obj" => Some(obj_counts(&bytes).0),
         "stl" => {
-            let declared = bytes
-                .get(80..STL_BINARY_HEADER)
-                .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as usize);
-            let binary = declared.is_some_and(|n| {
-                STL_BINARY_HEADER as u64 + STL_BINARY_TRIANGLE * n as u64 == bytes.len() as u64
-            });
-            if !binary && solid_keyword_offset(&bytes).is_some() && !bytes.contains(&0) {
+            let (declared, ascii) = stl_layout(&bytes);
+            if ascii {
                 let facets = bytes.split(|&b| b == b'\n').filter(|line| {
                     let mut words = line
                         .split(|b| b.is_ascii_whitespace())
@@ -851,7 +846,7 @@ pub fn count_triangles(path: &Path) -> Option<usize> {
                 });
                 Some(facets.count())
             } else {
-                declared
+                declared.map(|n| n as usize)
             }
         }
         _ => None,
@@ -879,6 +874,20 @@ const STL_BINARY_HEADER: usize = 84;
 /// Size of one triangle record of binary STL.
 const STL_BINARY_TRIANGLE: u64 = 50;
 
+/// The triangle count a binary STL header declares (`None` for fewer than 84 bytes), and
+/// whether the bytes are read as ASCII STL: not exactly the size that count makes, starting
+/// with `solid` and without a NUL byte (see [`parse_stl`]).
+fn stl_layout(bytes: &[u8]) -> (Option<u32>, bool) {
+    let declared = bytes
+        .get(80..STL_BINARY_HEADER)
+        .map(|count| u32::from_le_bytes([count[0], count[1], count[2], count[3]]));
+    let exact_binary = declared.is_some_and(|n| {
+        STL_BINARY_HEADER as u64 + STL_BINARY_TRIANGLE * u64::from(n) == bytes.len() as u64
+    });
+    let ascii = !exact_binary && solid_keyword_offset(bytes).is_some() && !bytes.contains(&0);
+    (declared, ascii)
+}
+
 /// Parses STL bytes, binary or ASCII.
 ///
 /// `stl_io::read_stl` decides between ASCII and binary by checking whether
@@ -896,79 +905,74 @@ fn parse_stl(path: &Path, bytes: &[u8]) -> Result<MeshData, MeshError> {
         message,
     };
 
-    let declared_triangles = bytes
-        .get(80..STL_BINARY_HEADER)
-        .map(|count| u32::from_le_bytes([count[0], count[1], count[2], count[3]]));
+    let (declared_triangles, ascii) = stl_layout(bytes);
     let binary_size =
         declared_triangles.map(|n| STL_BINARY_HEADER as u64 + STL_BINARY_TRIANGLE * u64::from(n));
-    let exact_binary = binary_size == Some(bytes.len() as u64);
-    let solid_offset = solid_keyword_offset(bytes);
 
-    let (format, input): (&'static str, Cow<'_, [u8]>) =
-        if !exact_binary && solid_offset.is_some() && !bytes.contains(&0) {
-            // ASCII. Replace the first line by one stl_io accepts ("solid " + name).
-            let start = solid_offset.unwrap_or(0);
-            let rest = match bytes[start..].iter().position(|&b| b == b'\n') {
-                Some(newline) => &bytes[start + newline + 1..],
-                None => &[][..],
-            };
-            let mut normalised = b"solid mesh\n".to_vec();
-            normalised.extend_from_slice(rest);
-            ("ASCII STL", Cow::Owned(normalised))
-        } else {
-            let format = "binary STL";
-            let (Some(count), Some(expected)) = (declared_triangles, binary_size) else {
-                let message = if bytes.is_empty() {
-                    "the file is empty".to_string()
-                } else {
-                    format!(
-                        "the file has {} bytes, fewer than the {STL_BINARY_HEADER}-byte header \
-                         of a binary STL, and does not start with \"solid\" like an ASCII STL",
-                        bytes.len()
-                    )
-                };
-                return Err(parse_error(format, message));
-            };
-            if count as usize > crate::limits::MAX_MESH_TRIANGLES {
-                return Err(parse_error(
-                    format,
-                    format!(
-                        "the header declares {count} triangles, more than the limit of {}",
-                        crate::limits::MAX_MESH_TRIANGLES
-                    ),
-                ));
-            }
-            if (bytes.len() as u64) < expected {
-                return Err(parse_error(
-                    format,
-                    format!(
-                        "the header declares {count} triangles, which need {expected} bytes, \
-                         but the file has only {} bytes",
-                        bytes.len()
-                    ),
-                ));
-            }
-            if bytes.len() as u64 >= expected + STL_BINARY_TRIANGLE {
-                // A whole triangle record or more past the declared ones: the count is wrong
-                // (reading it would silently drop triangles). Shorter trailers are padding.
-                return Err(parse_error(
-                    format,
-                    format!(
-                        "the header declares {count} triangles, which need {expected} bytes, \
-                         but the file has {} bytes: the count is wrong",
-                        bytes.len()
-                    ),
-                ));
-            }
-            if bytes.starts_with(b"solid") {
-                // Blank the header so stl_io does not take it for ASCII.
-                let mut patched = bytes.to_vec();
-                patched[..80].fill(0);
-                (format, Cow::Owned(patched))
-            } else {
-                (format, Cow::Borrowed(bytes))
-            }
+    let (format, input): (&'static str, Cow<'_, [u8]>) = if ascii {
+        // ASCII. Replace the first line by one stl_io accepts ("solid " + name).
+        let start = solid_keyword_offset(bytes).unwrap_or(0);
+        let rest = match bytes[start..].iter().position(|&b| b == b'\n') {
+            Some(newline) => &bytes[start + newline + 1..],
+            None => &[][..],
         };
+        let mut normalised = b"solid mesh\n".to_vec();
+        normalised.extend_from_slice(rest);
+        ("ASCII STL", Cow::Owned(normalised))
+    } else {
+        let format = "binary STL";
+        let (Some(count), Some(expected)) = (declared_triangles, binary_size) else {
+            let message = if bytes.is_empty() {
+                "the file is empty".to_string()
+            } else {
+                format!(
+                    "the file has {} bytes, fewer than the {STL_BINARY_HEADER}-byte header \
+                         of a binary STL, and does not start with \"solid\" like an ASCII STL",
+                    bytes.len()
+                )
+            };
+            return Err(parse_error(format, message));
+        };
+        if count as usize > crate::limits::MAX_MESH_TRIANGLES {
+            return Err(parse_error(
+                format,
+                format!(
+                    "the header declares {count} triangles, more than the limit of {}",
+                    crate::limits::MAX_MESH_TRIANGLES
+                ),
+            ));
+        }
+        if (bytes.len() as u64) < expected {
+            return Err(parse_error(
+                format,
+                format!(
+                    "the header declares {count} triangles, which need {expected} bytes, \
+                         but the file has only {} bytes",
+                    bytes.len()
+                ),
+            ));
+        }
+        if bytes.len() as u64 >= expected + STL_BINARY_TRIANGLE {
+            // A whole triangle record or more past the declared ones: the count is wrong
+            // (reading it would silently drop triangles). Shorter trailers are padding.
+            return Err(parse_error(
+                format,
+                format!(
+                    "the header declares {count} triangles, which need {expected} bytes, \
+                         but the file has {} bytes: the count is wrong",
+                    bytes.len()
+                ),
+            ));
+        }
+        if bytes.starts_with(b"solid") {
+            // Blank the header so stl_io does not take it for ASCII.
+            let mut patched = bytes.to_vec();
+            patched[..80].fill(0);
+            (format, Cow::Owned(patched))
+        } else {
+            (format, Cow::Borrowed(bytes))
+        }
+    };
 
     let indexed = stl_io::read_stl(&mut Cursor::new(input.as_ref()))
         .map_err(|e| parse_error(format, e.to_string().replace('\n', " ")))?;
@@ -1223,6 +1227,31 @@ mod tests {
             bytes.extend_from_slice(&[0u8; 2]);
         }
         bytes
+    }
+
+    #[test]
+    fn triangles_are_counted_as_the_readers_find_them() {
+        let dir = tempfile::tempdir().unwrap();
+        let ascii = "solid two\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n\
+                     vertex 0 1 0\nendloop\nendfacet\n  facet normal 0 0 1\nouter loop\n\
+                     vertex 1 0 0\nvertex 1 1 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid two\n";
+        let obj = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nf 1 2 3 4\nf 1 2 5\n";
+        let cases = [
+            // A binary header that starts with "solid" is still binary.
+            (
+                "cube.stl",
+                binary_stl_bytes(&cube(), b"solid cube exported by some CAD tool"),
+            ),
+            ("two.stl", ascii.as_bytes().to_vec()),
+            ("fan.obj", obj.as_bytes().to_vec()),
+        ];
+        for (name, bytes) in cases {
+            let path = write(&dir, name, &bytes);
+            let read = load_mesh(&path).unwrap().triangles.len();
+            assert_eq!(count_triangles(&path), Some(read), "{name}");
+        }
+        assert_eq!(count_triangles(&dir.path().join("missing.stl")), None);
+        assert_eq!(count_triangles(&write(&dir, "m.ply", b"ply")), None);
     }
 
     fn write(dir: &tempfile::TempDir, name: &str, contents: &[u8]) -> PathBuf {
