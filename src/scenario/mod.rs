@@ -577,11 +577,23 @@ impl Scenario {
         check_non_negative_within(spec.clearance, MAX_LENGTH, " m", "clearance")?;
         check_count(spec.obstacle.len(), 0, MAX_OBSTACLES, "obstacle")?;
         check_count(spec.task.len(), 0, MAX_TASKS, "task")?;
-        Self::count_mesh_triangles(spec, dir)?;
         let mut obstacles = Vec::with_capacity(spec.obstacle.len());
         // A mesh placed many times is read and converted once; the cache also keeps the
-        // scenario's mesh budgets (triangles, decomposition work).
+        // scenario's mesh budgets (triangles, decomposition work). The triangles of all
+        // meshes are counted before the first is built.
         let mut meshes = MeshCache::new();
+        for (k, o) in spec.obstacle.iter().enumerate() {
+            let (ShapeKind::Mesh, Some(file)) = (o.shape, &o.file) else {
+                continue;
+            };
+            let path = dir.join(file);
+            let scale = o.scale.map_or([1.0; 3], |s| s.factors());
+            meshes
+                .count_ahead(&path, o.representation.unwrap_or_default(), scale)
+                .map_err(|reason| {
+                    Error::invalid(format!("obstacle[{k}].file"), path.display(), reason)
+                })?;
+        }
         for (k, o) in spec.obstacle.iter().enumerate() {
             let obstacle = Self::obstacle(k, o, dir, &mut meshes)?;
             obstacles.push(obstacle);
@@ -594,40 +606,6 @@ impl Scenario {
             orientations.push(Self::task_orientation(j, t)?);
         }
         Ok(Workspace::new(obstacles, tasks, spec.clearance)?.with_orientations(orientations))
-    }
-
-    /// The triangles of the scenario's distinct meshes (file, representation and scale, as
-    /// [`MeshCache`] tells them apart), counted before any is built: the limit
-    /// [`crate::limits::MAX_SCENE_MESH_TRIANGLES`] holds before a large mesh takes its time
-    /// and memory (two 5M-triangle meshes were refused only after the first was built, 31 s).
-    /// A file that cannot be counted is left to the build, which says why.
-    fn count_mesh_triangles(spec: &ScenarioSpec, dir: &Path) -> Result<()> {
-        let limit = crate::limits::MAX_SCENE_MESH_TRIANGLES;
-        let mut seen = std::collections::HashSet::new();
-        let mut total = 0usize;
-        for (k, o) in spec.obstacle.iter().enumerate() {
-            let (ShapeKind::Mesh, Some(file)) = (o.shape, &o.file) else {
-                continue;
-            };
-            let path = dir.join(file);
-            let scale = o.scale.map_or([1.0; 3], |s| s.factors()).map(f64::to_bits);
-            let key = (path.clone(), o.representation.unwrap_or_default(), scale);
-            if !seen.insert(key) {
-                continue;
-            }
-            total = total.saturating_add(crate::world::mesh::count_triangles(&path).unwrap_or(0));
-            if total > limit {
-                return Err(Error::invalid(
-                    format!("obstacle[{k}].file"),
-                    path.display(),
-                    format!(
-                        "the distinct meshes up to here have {total} triangles, more than the \
-                         limit of {limit} for a scenario"
-                    ),
-                ));
-            }
-        }
-        Ok(())
     }
 
     /// The orientation constraint of `[[task]]` number `j`: none, a full orientation or an

@@ -26,10 +26,34 @@ pub struct MeshCache {
     built: std::collections::HashMap<MeshKey, (SharedShape, usize)>,
     triangles: usize,
     voxel_tests: u64,
+    /// The meshes counted ahead of building ([`MeshCache::count_ahead`]) and their triangles.
+    counted: std::collections::HashSet<MeshKey>,
+    counted_triangles: usize,
 }
 
 /// What a built mesh shape depends on: the file, the representation and the scale (its bits).
 type MeshKey = (std::path::PathBuf, MeshRepresentation, [u64; 3]);
+
+/// The [`MeshKey`] of a mesh shape.
+fn mesh_key(
+    file: &std::path::Path,
+    representation: MeshRepresentation,
+    scale: [f64; 3],
+) -> MeshKey {
+    (file.to_path_buf(), representation, scale.map(f64::to_bits))
+}
+
+/// Why `total` triangles of distinct meshes break the scenario's limit, if they do.
+fn over_triangle_limit(total: usize) -> std::result::Result<(), String> {
+    let limit = crate::limits::MAX_SCENE_MESH_TRIANGLES;
+    if total > limit {
+        return Err(format!(
+            "the distinct meshes up to here have {total} triangles, more than the limit of \
+             {limit} for a scenario"
+        ));
+    }
+    Ok(())
+}
 
 impl MeshCache {
     /// An empty cache.
@@ -52,13 +76,7 @@ impl MeshCache {
     /// the reason when it would exceed one.
     fn charge(&mut self, triangles: usize, tests: u64) -> std::result::Result<(), String> {
         let total = self.triangles.saturating_add(triangles);
-        let limit = crate::limits::MAX_SCENE_MESH_TRIANGLES;
-        if total > limit {
-            return Err(format!(
-                "the distinct meshes up to here have {total} triangles, more than the limit of \
-                 {limit} for a scenario"
-            ));
-        }
+        over_triangle_limit(total)?;
         let all_tests = self.voxel_tests.saturating_add(tests);
         let limit = crate::world::mesh::MAX_DECOMPOSITION_TESTS;
         if all_tests > limit {
@@ -70,6 +88,26 @@ impl MeshCache {
         }
         (self.triangles, self.voxel_tests) = (total, all_tests);
         Ok(())
+    }
+
+    /// Counts, before any mesh is built, the triangles of the mesh `file` with
+    /// `representation` and `scale` ([`crate::world::mesh::count_triangles`]) unless the same
+    /// mesh was counted before: the reason when the distinct meshes counted so far break the
+    /// triangle limit, so that it holds before a large mesh takes its time and memory (two
+    /// 4M-triangle meshes were refused only after the first was built, 13 s and 2 GB). A file
+    /// that cannot be counted adds nothing; its build says what is wrong.
+    pub fn count_ahead(
+        &mut self,
+        file: &std::path::Path,
+        representation: MeshRepresentation,
+        scale: [f64; 3],
+    ) -> std::result::Result<(), String> {
+        if !self.counted.insert(mesh_key(file, representation, scale)) {
+            return Ok(());
+        }
+        let triangles = crate::world::mesh::count_triangles(file).unwrap_or(0);
+        self.counted_triangles = self.counted_triangles.saturating_add(triangles);
+        over_triangle_limit(self.counted_triangles)
     }
 }
 
@@ -236,7 +274,7 @@ impl ObstacleShape {
                 representation,
                 scale,
             } => {
-                let key = (file.clone(), representation, scale.map(f64::to_bits));
+                let key = mesh_key(file, representation, scale);
                 if let Some((shape, triangles)) = cache.built.get(&key) {
                     return Ok((shape.clone(), id, *triangles));
                 }
