@@ -546,34 +546,33 @@ fn check_collada(text: &str) -> std::result::Result<(), String> {
         }
         if name == "input" && matches!(semantic, "POSITION" | "NORMAL") {
             // The reader takes X, Y, Z floats from a <float_array> and nothing else.
-            let accessor = target.descendants().find(|c| c.has_tag_name("accessor"));
-            let three_floats = accessor.is_some_and(|a| {
-                let params: Vec<_> = a.children().filter(|c| c.has_tag_name("param")).collect();
-                let array = a
-                    .attribute("source")
-                    .and_then(|s| s.strip_prefix('#'))
-                    .and_then(|s| ids.get(s));
-                params.len() >= 3
-                    && params.iter().all(|p| p.attribute("type") == Some("float"))
-                    && a.attribute("stride")
-                        .and_then(|s| s.trim().parse::<u64>().ok())
-                        .unwrap_or(1)
-                        >= 3
-                    && array.is_some_and(|x| x.has_tag_name("float_array"))
-            });
-            if !three_floats {
-                return Err(format!(
+            let bad = || {
+                format!(
                     "<source id=\"{}\"> ({semantic}): needs an <accessor> of stride 3 or more \
                      with three <param type=\"float\"> over a <float_array>",
                     crate::error::shorten(id)
-                ));
-            }
-            let accessor = accessor.expect("checked above");
-            let (count, stride) = (number(accessor, "count")?, number(accessor, "stride")?);
+                )
+            };
+            let accessor = target
+                .descendants()
+                .find(|c| c.has_tag_name("accessor"))
+                .ok_or_else(bad)?;
             let array = accessor
                 .attribute("source")
                 .and_then(|s| ids.get(s.strip_prefix('#')?))
-                .expect("checked above");
+                .filter(|x| x.has_tag_name("float_array"))
+                .ok_or_else(bad)?;
+            let params: Vec<_> = accessor
+                .children()
+                .filter(|c| c.has_tag_name("param"))
+                .collect();
+            // A missing stride is 1 (COLLADA's default).
+            let stride = number(accessor, "stride")?.max(1);
+            let floats = params.iter().all(|p| p.attribute("type") == Some("float"));
+            if params.len() < 3 || !floats || stride < 3 {
+                return Err(bad());
+            }
+            let count = number(accessor, "count")?;
             let values = array
                 .text()
                 .map_or(0, |t| t.split_ascii_whitespace().count()) as u64;
@@ -697,9 +696,13 @@ pub fn load_hull(
     // The COLLADA reader panics on some malformed files (a missing source, a short array)
     // instead of returning an error: such a panic is this file's error too.
     let scene = catch_quietly(|| mesh_loader::Loader::default().load_from_slice(&bytes, path))
-        .map_err(|why| match why.is_empty() {
-            true => "not a readable mesh: the mesh reader failed on it".to_string(),
-            false => format!("not a readable mesh: the mesh reader failed on it ({why})"),
+        .map_err(|why| {
+            let said = if why.is_empty() {
+                why
+            } else {
+                format!(" ({why})")
+            };
+            format!("not a readable mesh: the mesh reader failed on it{said}")
         })?
         .map_err(|e| format!("not a readable mesh: {e}"))?;
     let mut points: Vec<[f64; 3]> = Vec::new();
@@ -990,4 +993,20 @@ pub fn load_robot(
         out.body.disable_pairs(&pairs);
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_caught_panic_gives_its_first_line_and_no_panic_escapes() {
+        assert_eq!(catch_quietly(|| 7), Ok(7));
+        let e = catch_quietly(|| -> u8 { panic!("index out of bounds\nsecond line") });
+        assert_eq!(e, Err("index out of bounds".to_string()));
+        let formatted = catch_quietly(|| -> u8 { panic!("no entry for {}", "key") });
+        assert_eq!(formatted, Err("no entry for key".to_string()));
+        let silent = catch_quietly(|| -> u8 { std::panic::panic_any(3_u32) });
+        assert_eq!(silent, Err(String::new()));
+    }
 }

@@ -200,8 +200,10 @@ const NUMERIC: [(&str, &str, usize); 22] = [
 
 /// Where a URDF that the parser refused goes wrong, when it is one of the common faults the
 /// parser's own message does not place: malformed XML (with its line and column), a number
-/// attribute that is not a number or has the wrong count of numbers, or a `<geometry>` without
-/// exactly one shape. `None` when none is found (the parser's message is then shown).
+/// attribute that is not a number or has the wrong count of numbers, a `<geometry>` without
+/// exactly one shape, or (from the parser's `message`) a missing or repeated attribute or
+/// element and an unknown joint type or shape ([`locate_schema_fault`]). `None` when none is
+/// found (the parser's message is then shown).
 fn locate_fault(text: &str, message: &str) -> Option<String> {
     let doc = match roxmltree::Document::parse(text) {
         Ok(doc) => doc,
