@@ -314,6 +314,37 @@ fn a_design_folded_through_itself_at_home_gets_zero() {
         why.contains("link 2") && why.contains("link 5") && why.contains("self-collides"),
         "{why}"
     );
+    // What is checked is what is shipped: the folded pair is in contact at home but stays
+    // enabled (not "Default"), so the SRDF leaves it checked and a checker that loads it sees
+    // the home pose in collision too; every other pair in contact at home is "Default".
+    let body = RobotBody::new(&chain, Vec::new(), &SelfCollisionConfig::default());
+    let acm = body.acm();
+    let (p, q) = (0..body.len())
+        .flat_map(|p| (0..body.len()).map(move |q| (p, q)))
+        .find(|&(p, q)| body.link(p) == 2 && body.link(q) == 5)
+        .expect("bodies on links 2 and 5");
+    let (fp, fq) = (body.frame(p), body.frame(q));
+    assert!(
+        !acm.disabled()
+            .iter()
+            .any(|d| (d.link1 == fp && d.link2 == fq) || (d.link1 == fq && d.link2 == fp)),
+        "{fp}-{fq} disabled: {:?}",
+        acm.disabled()
+    );
+    assert!(acm
+        .pairs()
+        .iter()
+        .any(|&(a, b)| (body.link(a as usize), body.link(b as usize)) == (2, 5)));
+    let srdf = kinsynth::export::srdf::body_to_srdf(&body, "folded");
+    assert!(
+        !srdf.contains(&format!("link1=\"{fp}\" link2=\"{fq}\"")),
+        "{srdf}"
+    );
+    let mut frames = chain.frames();
+    let mut placed = kinsynth::collision::body::Placed::default();
+    chain.fk(chain.home(), &mut frames);
+    body.place(&frames, &mut placed);
+    assert!(body.self_contact(&frames, &placed).is_some());
     // Switched off, the fold is not checked.
     let config = PlannerConfig {
         self_collision: SelfCollisionConfig::off(),

@@ -18,8 +18,10 @@
 //! along edges. Bodies on frames that never move relative to each other and are apart at home
 //! can never collide and are not checked. A capsule pair of links at least two apart whose
 //! *cores* (the segments themselves) meet at home is a real fold of the arm through itself,
-//! not a joint housing:
-//! [`AllowedCollisions::home_fold`] reports it, and the planner gives such a design `R = 0`.
+//! not a joint housing: its frames are never disabled (neither Default nor Always), so the SRDF
+//! leaves the pair enabled and MoveIt, or any checker that loads it, sees the home pose in
+//! collision as the planner does; [`AllowedCollisions::home_fold`] reports it, and the planner
+//! gives such a design `R = 0`.
 
 use super::model::{Placed, RobotBody};
 use crate::kinematics::Chain;
@@ -205,29 +207,32 @@ impl AllowedCollisions {
                 })
             })
         };
+        // A contact at home disables the pair ("Default"), unless it is a fold: then the pair
+        // stays enabled (and out of "Always"), so that the SRDF and every checker see the home
+        // pose in collision, as the planner does.
         let mut home_fold = None;
+        let mut folded = vec![false; n * n];
         for i in 0..n {
             for j in i + 1..n {
-                if reason[idx(i, j)].is_some() {
+                if reason[idx(i, j)].is_some() || !contact(&frames, &placed, &balls, i, j) {
                     continue;
                 }
-                if contact(&frames, &placed, &balls, i, j) {
-                    reason[idx(i, j)] = Some(Reason::Default);
-                    if home_fold.is_none() {
-                        'fold: for &p in &groups[i].bodies {
-                            for &q in &groups[j].bodies {
-                                let apart = body.link(p).abs_diff(body.link(q)) >= 2;
-                                if apart
-                                    && body
-                                        .core_distance(&frames, p, q)
-                                        .is_some_and(|d| d <= FOLD_TOLERANCE)
-                                {
-                                    home_fold = Some((body.link(p), body.link(q)));
-                                    break 'fold;
-                                }
-                            }
-                        }
+                let fold = groups[i].bodies.iter().find_map(|&p| {
+                    groups[j].bodies.iter().find_map(|&q| {
+                        let apart = body.link(p).abs_diff(body.link(q)) >= 2;
+                        (apart
+                            && body
+                                .core_distance(&frames, p, q)
+                                .is_some_and(|d| d <= FOLD_TOLERANCE))
+                        .then(|| (body.link(p), body.link(q)))
+                    })
+                });
+                match fold {
+                    Some(links) => {
+                        folded[idx(i, j)] = true;
+                        home_fold.get_or_insert(links);
                     }
+                    None => reason[idx(i, j)] = Some(Reason::Default),
                 }
             }
         }
@@ -235,7 +240,10 @@ impl AllowedCollisions {
         let mut candidates: Vec<(usize, usize, usize, usize)> = Vec::new(); // i, j, hits, misses
         for i in 0..n {
             for j in i + 1..n {
-                if reason[idx(i, j)].is_none() && groups[i].level != groups[j].level {
+                if reason[idx(i, j)].is_none()
+                    && !folded[idx(i, j)]
+                    && groups[i].level != groups[j].level
+                {
                     candidates.push((i, j, 0, 0));
                 }
             }
