@@ -38,27 +38,12 @@ pub fn sincos_many(x: &[f64], out: &mut [(f64, f64)]) {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn sincos_many_avx2(x: &[f64], out: &mut [(f64, f64)]) {
-    // Whole blocks of four as arrays (no copy of a run-time length), then the rest padded.
-    let mut xs = x.chunks_exact(4);
-    let mut os = out.chunks_exact_mut(4);
-    for (xb, ob) in (&mut xs).zip(&mut os) {
-        // SAFETY: the processor supports AVX2 (the caller's contract).
-        let sc = unsafe { sincos4_avx2([xb[0], xb[1], xb[2], xb[3]]) };
-        for (o, v) in ob.iter_mut().zip(sc) {
-            *o = v;
-        }
-    }
-    let rest = os.into_remainder();
-    if !rest.is_empty() {
+    for (xs, os) in x.chunks(4).zip(out.chunks_mut(4)) {
         let mut four = [0.0; 4];
-        for (f, &v) in four.iter_mut().zip(xs.remainder()) {
-            *f = v;
-        }
-        // SAFETY: as above.
+        four[..xs.len()].copy_from_slice(xs);
+        // SAFETY: the processor supports AVX2 (the caller's contract).
         let sc = unsafe { sincos4_avx2(four) };
-        for (o, v) in rest.iter_mut().zip(sc) {
-            *o = v;
-        }
+        os.copy_from_slice(&sc[..os.len()]);
     }
 }
 
