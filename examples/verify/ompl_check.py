@@ -1,0 +1,232 @@
+#!/usr/bin/env python3
+"""Independent check of kinsynth's reachability with an OMPL planner (RRTConnect).
+
+For each task of a reach report, plans from home (every joint at 0) with OMPL's RRTConnect in
+joint space, with pinocchio for the kinematics and coal (FCL) for collisions, and says whether
+an independent planner reaches the tasks that kinsynth reached and, above all, any that kinsynth
+missed (an R that misses reachable tasks misleads the optimiser).
+
+- The robot is the exported URDF with its SRDF (`kinsynth urdf` or `optimize` write both); the
+  obstacles are the scenario's, loaded as `fcl_check.py` loads them (meshes by their
+  `representation`).
+- A state is valid when every robot body is farther than the scenario's `clearance` from every
+  obstacle and every self pair the SRDF leaves enabled is apart (coal's collision with a
+  security margin).
+- Goals: configurations whose `tool0` lies within the planner's `goal_tolerance` of the task
+  point, found by damped-least-squares inverse kinematics (pinocchio) from home and from random
+  starts within the joint limits, and valid. RRTConnect then connects home to any of them.
+- A path OMPL returns (its motions checked at OMPL's discrete resolution, `--resolution`) is
+  re-checked at 400 samples per edge, as `fcl_check.py` does; a task counts as reached by OMPL
+  only when its path passes.
+- Tasks with an orientation constraint are skipped (the goals here are points).
+
+Needs `pip install pin coal ompl`; not used by the tests.
+
+usage: ompl_check.py ROBOT.urdf ROBOT.srdf SCENARIO.toml REACH.json
+           [--seconds S] [--seed N] [--missed] [--resolution R]
+
+`--seconds` is the time per task (default 2, inverse kinematics included), `--missed` checks
+only the tasks kinsynth did not reach. Exit status 1 when OMPL reaches, with a path that passes
+the dense re-check, a task kinsynth missed; 0 otherwise.
+"""
+import argparse
+import json
+import os
+import sys
+import time
+import tomllib
+
+import numpy as np
+import pinocchio as pin
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from fcl_check import obstacle_geometry, rotation  # noqa: E402
+
+DENSE = 400  # samples per edge of the dense re-check
+
+
+class Problem:
+    """The robot, its collision model with the obstacles, and a validity test."""
+
+    def __init__(self, urdf, srdf, scenario_path):
+        with open(scenario_path, "rb") as f:
+            self.scenario = tomllib.load(f)
+        self.clearance = float(self.scenario.get("clearance", 0.0))
+        planner = self.scenario.get("planner", {})
+        self.tolerance = float(planner.get("goal_tolerance", 0.02))
+        self.model = pin.buildModelFromUrdf(urdf)
+        if self.model.nq != self.model.nv:
+            raise SystemExit(f"{urdf}: continuous or multi-dof joints are not supported")
+        self.geom = pin.buildGeomFromUrdf(self.model, urdf, pin.GeometryType.COLLISION)
+        robot = len(self.geom.geometryObjects)
+        self.geom.addAllCollisionPairs()
+        pin.removeCollisionPairs(self.model, self.geom, srdf)
+        self.self_pairs = len(self.geom.collisionPairs)
+        obstacles = []
+        for k, o in enumerate(self.scenario.get("obstacle", [])):
+            g = obstacle_geometry(o, os.path.dirname(scenario_path))
+            placement = pin.SE3(rotation(o), np.array(o["position"], dtype=float))
+            obstacles.append(
+                self.geom.addGeometryObject(pin.GeometryObject(f"obstacle{k}", 0, placement, g))
+            )
+        for r in range(robot):
+            for ob in obstacles:
+                self.geom.addCollisionPair(pin.CollisionPair(r, ob))
+        self.data = self.model.createData()
+        self.gdata = pin.GeometryData(self.geom)
+        for p, cp in enumerate(self.geom.collisionPairs):
+            env = cp.second in obstacles or cp.first in obstacles
+            self.gdata.collisionRequests[p].security_margin = self.clearance if env else 0.0
+        self.lo = np.array(self.model.lowerPositionLimit, dtype=float)
+        self.hi = np.array(self.model.upperPositionLimit, dtype=float)
+        self.tip = self.model.getFrameId("tool0")
+        if self.tip >= len(self.model.frames):
+            raise SystemExit(f"{urdf}: no tool0 frame")
+        self.checks = 0
+
+    def valid(self, q):
+        """No contact: obstacles beyond the clearance, enabled self pairs apart."""
+        self.checks += 1
+        return not pin.computeCollisions(
+            self.model, self.data, self.geom, self.gdata, np.asarray(q, dtype=float), True
+        )
+
+    def tip_position(self, q):
+        pin.forwardKinematics(self.model, self.data, q)
+        pin.updateFramePlacement(self.model, self.data, self.tip)
+        return self.data.oMf[self.tip].translation.copy()
+
+    def ik(self, target, q0, iterations=150):
+        """Damped least squares on the tip position within the limits; the final q and error."""
+        q = q0.copy()
+        for _ in range(iterations):
+            err = target - self.tip_position(q)
+            e = np.linalg.norm(err)
+            if e < 0.25 * self.tolerance:
+                break
+            J = pin.computeFrameJacobian(
+                self.model, self.data, q, self.tip, pin.LOCAL_WORLD_ALIGNED
+            )[:3]
+            step = J.T @ np.linalg.solve(J @ J.T + 1e-4 * np.eye(3), err)
+            q = np.clip(q + step, self.lo, self.hi)
+        return q, np.linalg.norm(target - self.tip_position(q))
+
+    def edge_clean(self, a, b):
+        """Every one of DENSE + 1 samples of the straight edge a → b is valid."""
+        return all(self.valid(a + s * (b - a)) for s in np.linspace(0.0, 1.0, DENSE + 1))
+
+
+def plan_task(problem, target, seconds, rng, resolution):
+    """OMPL's result for one task: (status, seconds used, goal postures, IK tries)."""
+    from ompl import base as ob
+    from ompl import geometric as og
+
+    start_time = time.monotonic()
+    n = problem.model.nq
+    home = np.zeros(n)
+    goals = []
+    tries = 0
+    # Goal postures: from home first, then from random starts, for up to a third of the time.
+    while time.monotonic() - start_time < seconds / 3 and len(goals) < 10:
+        q0 = home if tries == 0 else rng.uniform(problem.lo, problem.hi)
+        tries += 1
+        q, err = problem.ik(target, q0)
+        if err <= problem.tolerance and problem.valid(q):
+            goals.append(q)
+    if not goals:
+        return "no valid posture", time.monotonic() - start_time, 0, tries
+    space = ob.RealVectorStateSpace(n)
+    bounds = ob.RealVectorBounds(n)
+    for i in range(n):
+        bounds.setLow(i, float(problem.lo[i]))
+        bounds.setHigh(i, float(problem.hi[i]))
+    space.setBounds(bounds)
+    ss = og.SimpleSetup(space)
+    ss.setStateValidityChecker(lambda s: problem.valid([s[i] for i in range(n)]))
+    si = ss.getSpaceInformation()
+    si.setStateValidityCheckingResolution(resolution)
+    start = space.allocState()
+    for i in range(n):
+        start[i] = 0.0
+    ss.setStartState(start)
+    goal = ob.GoalStates(si)
+    for g in goals:
+        s = space.allocState()
+        for i in range(n):
+            s[i] = float(g[i])
+        goal.addState(s)
+    ss.setGoal(goal)
+    ss.setPlanner(og.RRTConnect(si))
+    left = seconds - (time.monotonic() - start_time)
+    if left <= 0 or not ss.solve(left) or not ss.haveExactSolutionPath():
+        return "no path", time.monotonic() - start_time, len(goals), tries
+    used = time.monotonic() - start_time
+    path = ss.getSolutionPath()
+    pts = [np.array([path.getState(k)[i] for i in range(n)]) for k in range(path.getStateCount())]
+    clean = all(problem.edge_clean(a, b) for a, b in zip(pts, pts[1:]))
+    return ("reached" if clean else "path fails dense check"), used, len(goals), tries
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("urdf")
+    ap.add_argument("srdf")
+    ap.add_argument("scenario")
+    ap.add_argument("reach")
+    ap.add_argument("--seconds", type=float, default=2.0)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--missed", action="store_true")
+    ap.add_argument("--resolution", type=float, default=0.002)
+    args = ap.parse_args()
+
+    from ompl import util as ou
+
+    ou.setLogLevel(ou.LogLevel.LOG_WARN)
+    ou.RNG.setSeed(args.seed + 1)  # OMPL refuses seed 0
+    rng = np.random.default_rng(args.seed)
+    problem = Problem(args.urdf, args.srdf, args.scenario)
+    with open(args.reach) as f:
+        report = json.load(f)
+    tasks = problem.scenario.get("task", [])
+    home_valid = problem.valid(np.zeros(problem.model.nq))
+    if not home_valid:
+        print("home collides: OMPL can reach no task")
+    counts = {"kinsynth": 0, "ompl": 0, "only_ompl": 0, "checked": 0, "skipped": 0}
+    for t in report["targets"]:
+        i = t["index"]
+        oriented = i < len(tasks) and ("orientation" in tasks[i] or "approach" in tasks[i])
+        mine = bool(t["reached"])
+        counts["kinsynth"] += mine
+        if oriented or (args.missed and mine):
+            counts["skipped"] += 1
+            continue
+        counts["checked"] += 1
+        target = np.array(t["point"], dtype=float)
+        if home_valid:
+            status, used, goals, tries = plan_task(
+                problem, target, args.seconds, rng, args.resolution
+            )
+        else:
+            status, used, goals, tries = "home collides", 0.0, 0, 0
+        theirs = status == "reached"
+        counts["ompl"] += theirs
+        counts["only_ompl"] += theirs and not mine
+        flag = "  <-- reached by OMPL only" if theirs and not mine else ""
+        print(
+            f"task {i:3}: kinsynth {'reached' if mine else 'missed '}  OMPL {status} "
+            f"({used:.2f} s, {goals} valid goal postures from {tries} IK starts){flag}"
+        )
+    print(
+        f"{counts['checked']} tasks checked ({counts['skipped']} skipped), kinsynth reached "
+        f"{counts['kinsynth']} of {len(report['targets'])}, OMPL reached {counts['ompl']} "
+        f"of those checked; {counts['only_ompl']} reached by OMPL only; "
+        f"{problem.self_pairs} self pairs enabled, {problem.checks} validity checks, "
+        f"{args.seconds} s per task"
+    )
+    sys.stdout.flush()
+    # The bindings report reference leaks at interpreter exit; leave without them.
+    os._exit(1 if counts["only_ompl"] else 0)
+
+
+if __name__ == "__main__":
+    main()
