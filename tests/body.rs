@@ -280,10 +280,9 @@ fn certified_never_calls_a_self_colliding_edge_free() {
     }
 }
 
-#[test]
-fn a_design_folded_through_itself_at_home_gets_zero() {
-    // Base → (0.4, 0) → turn left (0.4, 0.2) → left (0.2, 0.2) → left, down through link 2's
-    // body at (0.2, 0): the last link crosses the first.
+/// Base → (0.4, 0) → turn left (0.4, 0.2) → left (0.2, 0.2) → left, down through link 2's
+/// body at (0.2, 0): the last link crosses the first at home.
+fn folded_arm() -> Design {
     let joint = axes(&[(Axis::Rz, -0.5, 0.5)]);
     let link = |a: f64, theta: f64| LinkDesign {
         a,
@@ -291,7 +290,7 @@ fn a_design_folded_through_itself_at_home_gets_zero() {
         axes: joint,
         ..LinkDesign::default()
     };
-    let design = Design {
+    Design {
         base: Placement::default(),
         link_radius: 0.02,
         colliders_per_link: 2,
@@ -303,7 +302,12 @@ fn a_design_folded_through_itself_at_home_gets_zero() {
             link(0.4, FRAC_PI_2),
         ],
         tool: None,
-    };
+    }
+}
+
+#[test]
+fn a_design_folded_through_itself_at_home_gets_zero() {
+    let design = folded_arm();
     let w = Workspace::new(Vec::new(), vec![Point3::new(0.5, 0.0, 0.0)], 0.0).unwrap();
     let scene = Arc::new(CollisionScene::new(&w));
     let chain = design.chain();
@@ -484,4 +488,36 @@ fn scenario_self_collision_keys_are_validated() {
         "{err}"
     );
     assert_eq!(err.trim().lines().count(), 1, "{err}");
+}
+
+/// `kinsynth urdf` exports a design folded through itself at home, with a one-line warning
+/// naming the links, and an SRDF that keeps the crossing pair enabled; a design that is not
+/// folded gets no warning.
+#[test]
+fn urdf_warns_of_a_design_folded_at_home() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, design, folded) in [
+        ("folded", folded_arm(), true),
+        ("arm", folding_arm(), false),
+    ] {
+        let file = dir.path().join(format!("{name}.json"));
+        std::fs::write(&file, serde_json::to_string(&design).unwrap()).unwrap();
+        let urdf = dir.path().join(format!("{name}.urdf"));
+        let out = kinsynth(&["urdf", file.to_str().unwrap(), "-o", urdf.to_str().unwrap()]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{stderr}");
+        assert!(urdf.exists());
+        if folded {
+            assert_eq!(stderr.lines().count(), 1, "{stderr}");
+            assert!(
+                stderr.contains("folded.json")
+                    && stderr.contains("link 2 and link 5 cross each other"),
+                "{stderr}"
+            );
+            let srdf = std::fs::read_to_string(dir.path().join("folded.srdf")).unwrap();
+            assert!(!srdf.contains("link2_dh\" link2=\"link5_dh\""), "{srdf}");
+        } else {
+            assert!(stderr.is_empty(), "{stderr}");
+        }
+    }
 }
