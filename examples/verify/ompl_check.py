@@ -26,10 +26,11 @@ missed (an R that misses reachable tasks misleads the optimiser).
 Needs `pip install pin coal ompl`; not used by the tests.
 
 usage: ompl_check.py ROBOT.urdf ROBOT.srdf SCENARIO.toml REACH.json
-           [--seconds S] [--seed N] [--missed] [--resolution R]
+           [--seconds S] [--seed N] [--missed] [--resolution R] [--tip FRAME]
 
 `--seconds` is the time per task (default 2, inverse kinematics included), `--missed` checks
-only the tasks kinsynth did not reach. Exit status 1 when OMPL reaches, with a path that passes
+only the tasks kinsynth did not reach, `--tip` names the tool frame of an imported arm
+(default `tool0`, kinsynth's). Exit status 1 when OMPL reaches, with a path that passes
 the dense re-check, a task kinsynth missed; 0 otherwise.
 """
 import argparse
@@ -51,7 +52,7 @@ DENSE = 400  # samples per edge of the dense re-check
 class Problem:
     """The robot, its collision model with the obstacles, and a validity test."""
 
-    def __init__(self, urdf, srdf, scenario_path):
+    def __init__(self, urdf, srdf, scenario_path, tip="tool0"):
         with open(scenario_path, "rb") as f:
             self.scenario = tomllib.load(f)
         self.clearance = float(self.scenario.get("clearance", 0.0))
@@ -82,9 +83,9 @@ class Problem:
             self.gdata.collisionRequests[p].security_margin = self.clearance if env else 0.0
         self.lo = np.array(self.model.lowerPositionLimit, dtype=float)
         self.hi = np.array(self.model.upperPositionLimit, dtype=float)
-        self.tip_frame = self.model.getFrameId("tool0")
+        self.tip_frame = self.model.getFrameId(tip)
         if self.tip_frame >= len(self.model.frames):
-            raise SystemExit(f"{urdf}: no tool0 frame")
+            raise SystemExit(f"{urdf}: no frame named {tip!r} (--tip)")
         self.checks = 0
 
     def valid(self, q):
@@ -222,6 +223,7 @@ def main():
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--missed", action="store_true")
     ap.add_argument("--resolution", type=float, default=0.002)
+    ap.add_argument("--tip", default="tool0", help="the tool frame (default tool0)")
     args = ap.parse_args()
 
     from ompl import util as ou
@@ -229,7 +231,7 @@ def main():
     ou.setLogLevel(ou.LogLevel.LOG_WARN)
     ou.RNG.setSeed(args.seed + 1)  # OMPL refuses seed 0
     rng = np.random.default_rng(args.seed)
-    problem = Problem(args.urdf, args.srdf, args.scenario)
+    problem = Problem(args.urdf, args.srdf, args.scenario, args.tip)
     with open(args.reach) as f:
         report = json.load(f)
     tasks = problem.scenario.get("task", [])
