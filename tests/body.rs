@@ -469,6 +469,23 @@ fn urdf_writes_the_srdf_beside_the_urdf() {
         srdf.contains("link1=\"link2_dh\" link2=\"link4_dh\" reason=\"User\""),
         "{srdf}"
     );
+    // `reach --write-srdf` on the design writes the same matrix as `urdf`.
+    let written = dir.path().join("arm2.srdf");
+    let out = kinsynth(&[
+        "reach",
+        scenario.to_str().unwrap(),
+        "--design",
+        design.to_str().unwrap(),
+        "--write-srdf",
+        written.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let again = std::fs::read_to_string(&written).unwrap();
+    assert_eq!(again.replace("\"arm2\"", "\"arm\""), srdf);
 }
 
 #[test]

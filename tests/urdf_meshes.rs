@@ -876,3 +876,74 @@ fn mesh_elements_share_one_hull_of_distinct_points() {
         .iter()
         .all(|s| Arc::ptr_eq(&s.shape.0, &spheres[0].shape.0)));
 }
+
+/// `reach --write-srdf` writes the pairs the run did not check, for the imported arm under its
+/// own frame names: the computed matrix plus the pairs of `--srdf`, with the URDF's base and tip
+/// as the planning group; reading it back (as `--srdf`) checks exactly the same pairs. A path
+/// shared with `--json` fails before anything is written.
+#[test]
+fn reach_writes_the_srdf_of_the_pairs_it_checked() {
+    let dir = tempfile::tempdir().unwrap();
+    let given = dir.path().join("given.srdf");
+    std::fs::write(
+        &given,
+        "<robot name=\"mesh_arm\">\n<disable_collisions link1=\"link1\" link2=\"link3\" reason=\"Never\"/>\n</robot>\n",
+    )
+    .unwrap();
+    let out = dir.path().join("checked.srdf");
+    let urdf = arm_urdf();
+    let (ok, stdout, err) = kinsynth(&[
+        "reach",
+        "examples/scenarios/ur5-cell.toml",
+        "--urdf",
+        urdf.to_str().unwrap(),
+        "--srdf",
+        given.to_str().unwrap(),
+        "--write-srdf",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(stdout.contains("checked.srdf"), "{stdout}");
+    let text = std::fs::read_to_string(&out).unwrap();
+    let body = import(
+        &urdf,
+        &ImportOptions {
+            srdf: Some(given),
+            ..ImportOptions::default()
+        },
+    );
+    assert!(text.contains(&format!(
+        "<chain base_link=\"{}\" tip_link=\"{}\"/>",
+        body.urdf.base, body.urdf.tip
+    )));
+    assert!(text.contains("<disable_collisions link1=\"link1\" link2=\"link3\""));
+    assert_eq!(
+        text.matches("<disable_collisions").count(),
+        body.body.acm().disabled().len()
+    );
+    // Read back, the written SRDF leaves exactly the pairs the run checked.
+    let again = import(
+        &urdf,
+        &ImportOptions {
+            srdf: Some(out.clone()),
+            ..ImportOptions::default()
+        },
+    );
+    assert_eq!(again.body.self_pairs(), body.body.self_pairs());
+    assert!(body.body.self_pairs().len() < arm().body.self_pairs().len());
+
+    let json = dir.path().join("r.json");
+    let (ok, _, err) = kinsynth(&[
+        "reach",
+        "examples/scenarios/ur5-cell.toml",
+        "--json",
+        json.to_str().unwrap(),
+        "--write-srdf",
+        json.to_str().unwrap(),
+    ]);
+    assert!(
+        !ok && err.contains("--write-srdf") && err.lines().count() == 1,
+        "{err}"
+    );
+    assert!(!json.exists());
+}

@@ -38,6 +38,11 @@ pub struct Args {
     /// for `kinsynth view` to draw.
     #[arg(long)]
     pub tree: bool,
+    /// Write the SRDF of the self pairs this run checks (atomically): the allowed-collision
+    /// matrix computed for the robot, with the pairs of --srdf for a URDF robot. With the URDF
+    /// it lets MoveIt, or pinocchio and coal, check exactly the pairs kinsynth checked.
+    #[arg(long)]
+    pub write_srdf: Option<PathBuf>,
     #[command(flatten)]
     pub urdf: UrdfReach,
 }
@@ -53,12 +58,23 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         seeds,
         json,
         tree,
+        write_srdf,
         urdf,
     } = args;
     use rayon::prelude::*;
     // Output locations are checked first: nothing is written when one of them is bad.
     if let Some(path) = &json {
         kinsynth::io::check_output_file(path)?;
+    }
+    if let Some(path) = &write_srdf {
+        kinsynth::io::check_output_file(path)?;
+        if json.as_ref() == Some(path) || urdf.trajectories.as_ref() == Some(path) {
+            return Err(kinsynth::Error::invalid(
+                "--write-srdf",
+                path.display(),
+                "is also the --json report or the --trajectories folder",
+            ));
+        }
     }
     if let Some(dir) = &urdf.trajectories {
         kinsynth::io::check_output_dir(dir)?;
@@ -78,9 +94,13 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         (Some(p), None, None) => kinsynth::optimize::runner::Replay::from_best(p)?,
         _ => None,
     };
+    // The SRDF's planning group: the imported robot's own base and tip frames, else the
+    // exported design's.
+    let mut group = None;
     let (chain, urdf_names, body) = match urdf.robot.load(&s)? {
         Some(r) => {
             let body = std::sync::Arc::new(r.body);
+            group = Some((r.urdf.base, r.urdf.tip));
             (r.urdf.chain, Some(r.urdf.joint_names), Some(body))
         }
         None => match &design {
@@ -211,6 +231,39 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         }
         let text = serde_json::to_string_pretty(&v).expect("a report serialises");
         kinsynth::io::write_atomic(&path, text.as_bytes())?;
+    }
+    if let Some(path) = &write_srdf {
+        // The body the planner used: the imported one, else the one it builds from the
+        // planner's self-collision settings.
+        let built;
+        let checked = match &body {
+            Some(b) => &**b,
+            None => {
+                built = kinsynth::collision::RobotBody::new(
+                    &chain,
+                    Vec::new(),
+                    &planner.self_collision,
+                );
+                &built
+            }
+        };
+        let name = path
+            .file_stem()
+            .and_then(|n| n.to_str())
+            .filter(|n| !n.is_empty())
+            .unwrap_or("kinsynth_robot");
+        let text = match &group {
+            Some((base, tip)) => {
+                kinsynth::export::srdf::chain_body_to_srdf(checked, name, base, tip)
+            }
+            None => kinsynth::export::srdf::body_to_srdf(checked, name),
+        };
+        kinsynth::io::write_atomic(path, text.as_bytes())?;
+        say!(
+            "wrote {} ({} pairs never checked)",
+            path.display(),
+            checked.acm().disabled().len()
+        );
     }
     if let Some(dir) = &urdf.trajectories {
         let files = kinsynth::export::trajectory::write_trajectories(&report, dir)?;

@@ -30,14 +30,22 @@ fn escape(s: &str) -> String {
         .replace('"', "&quot;")
 }
 
-/// The SRDF text for the robot body `body`, robot name `name`.
+/// The SRDF text for the robot body `body` of an exported design, robot name `name`.
 pub fn body_to_srdf(body: &RobotBody, name: &str) -> String {
+    chain_body_to_srdf(body, name, BASE_LINK, TOOL_LINK)
+}
+
+/// The SRDF text for the robot body `body`, robot name `name`, whose planning group is the chain
+/// from the URDF link `base` to the URDF link `tip` (for an imported robot, its own frames).
+pub fn chain_body_to_srdf(body: &RobotBody, name: &str, base: &str, tip: &str) -> String {
     let mut out = String::new();
     let _ = writeln!(out, "<?xml version=\"1.0\"?>");
     let _ = writeln!(out, "<robot name=\"{}\">", escape(name));
     let _ = writeln!(
         out,
-        "  <group name=\"{GROUP}\">\n    <chain base_link=\"{BASE_LINK}\" tip_link=\"{TOOL_LINK}\"/>\n  </group>"
+        "  <group name=\"{GROUP}\">\n    <chain base_link=\"{}\" tip_link=\"{}\"/>\n  </group>",
+        escape(base),
+        escape(tip)
     );
     for d in body.acm().disabled() {
         let _ = writeln!(
