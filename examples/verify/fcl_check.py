@@ -19,6 +19,11 @@ starts at home, outside, so such a body must have crossed the surface between tw
 output says when this applies.
 
 usage: fcl_check.py ROBOT.urdf ROBOT.srdf SCENARIO.toml REACH.json [SAMPLES_PER_EDGE]
+           [--package-dir DIR]...
+
+`--package-dir DIR` (repeatable) is where `package://NAME/…` mesh paths of an imported arm are
+looked up (as `DIR/NAME/…`, pinocchio's rule); relative mesh paths are taken from the URDF's
+folder.
 """
 import functools
 import json
@@ -68,14 +73,33 @@ def obstacle_geometry(o, scenario_dir):
     raise ValueError(f"unknown obstacle shape {shape!r}")
 
 
+def package_dirs_of(argv):
+    """The arguments without the `--package-dir DIR` pairs, and those directories."""
+    rest, dirs = [], []
+    it = iter(argv)
+    for a in it:
+        if a == "--package-dir":
+            dirs.append(next(it))
+        else:
+            rest.append(a)
+    return rest, dirs
+
+
 def main():
-    urdf, srdf, scenario_path, reach_path = sys.argv[1:5]
-    samples = int(sys.argv[5]) if len(sys.argv) > 5 else 400
+    args, package_dirs = package_dirs_of(sys.argv[1:])
+    urdf, srdf, scenario_path, reach_path = args[:4]
+    samples = int(args[4]) if len(args) > 4 else 400
     with open(scenario_path, "rb") as f:
         scenario = tomllib.load(f)
     clearance = scenario.get("clearance", 0.0)
     model = pin.buildModelFromUrdf(urdf)
-    geom = pin.buildGeomFromUrdf(model, urdf, pin.GeometryType.COLLISION)
+    geom = pin.buildGeomFromUrdf(
+        model,
+        urdf,
+        pin.GeometryType.COLLISION,
+        # Relative mesh paths are taken from the URDF's folder.
+        package_dirs=package_dirs + [os.path.dirname(os.path.abspath(urdf))],
+    )
     robot_geoms = list(range(len(geom.geometryObjects)))
     geom.addAllCollisionPairs()
     pin.removeCollisionPairs(model, geom, srdf)

@@ -27,10 +27,11 @@ Needs `pip install pin coal ompl`; not used by the tests.
 
 usage: ompl_check.py ROBOT.urdf ROBOT.srdf SCENARIO.toml REACH.json
            [--seconds S] [--seed N] [--missed] [--resolution R] [--tip FRAME]
+           [--package-dir DIR]...
 
 `--seconds` is the time per task (default 2, inverse kinematics included), `--missed` checks
 only the tasks kinsynth did not reach, `--tip` names the tool frame of an imported arm
-(default `tool0`, kinsynth's). Exit status 1 when OMPL reaches, with a path that passes
+(default `tool0`, kinsynth's), `--package-dir` where its `package://` meshes lie. Exit status 1 when OMPL reaches, with a path that passes
 the dense re-check, a task kinsynth missed; 0 otherwise.
 """
 import argparse
@@ -52,7 +53,7 @@ DENSE = 400  # samples per edge of the dense re-check
 class Problem:
     """The robot, its collision model with the obstacles, and a validity test."""
 
-    def __init__(self, urdf, srdf, scenario_path, tip="tool0"):
+    def __init__(self, urdf, srdf, scenario_path, tip="tool0", package_dirs=()):
         with open(scenario_path, "rb") as f:
             self.scenario = tomllib.load(f)
         self.clearance = float(self.scenario.get("clearance", 0.0))
@@ -61,7 +62,13 @@ class Problem:
         self.model = pin.buildModelFromUrdf(urdf)
         if self.model.nq != self.model.nv:
             raise SystemExit(f"{urdf}: continuous or multi-dof joints are not supported")
-        self.geom = pin.buildGeomFromUrdf(self.model, urdf, pin.GeometryType.COLLISION)
+        self.geom = pin.buildGeomFromUrdf(
+            self.model,
+            urdf,
+            pin.GeometryType.COLLISION,
+            # Relative mesh paths are taken from the URDF's folder.
+            package_dirs=list(package_dirs) + [os.path.dirname(os.path.abspath(urdf))],
+        )
         robot = len(self.geom.geometryObjects)
         self.geom.addAllCollisionPairs()
         pin.removeCollisionPairs(self.model, self.geom, srdf)
@@ -224,6 +231,7 @@ def main():
     ap.add_argument("--missed", action="store_true")
     ap.add_argument("--resolution", type=float, default=0.002)
     ap.add_argument("--tip", default="tool0", help="the tool frame (default tool0)")
+    ap.add_argument("--package-dir", action="append", default=[], help="root of package://")
     args = ap.parse_args()
 
     from ompl import util as ou
@@ -231,7 +239,7 @@ def main():
     ou.setLogLevel(ou.LogLevel.LOG_WARN)
     ou.RNG.setSeed(args.seed + 1)  # OMPL refuses seed 0
     rng = np.random.default_rng(args.seed)
-    problem = Problem(args.urdf, args.srdf, args.scenario, args.tip)
+    problem = Problem(args.urdf, args.srdf, args.scenario, args.tip, args.package_dir)
     with open(args.reach) as f:
         report = json.load(f)
     tasks = problem.scenario.get("task", [])
