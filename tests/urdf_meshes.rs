@@ -880,7 +880,8 @@ fn mesh_elements_share_one_hull_of_distinct_points() {
 /// `reach --write-srdf` writes the pairs the run did not check, for the imported arm under its
 /// own frame names: the computed matrix plus the pairs of `--srdf`, with the URDF's base and tip
 /// as the planning group; reading it back (as `--srdf`) checks exactly the same pairs. A path
-/// shared with `--json` fails before anything is written.
+/// shared with `--json`, and capsule bodies on frames the URDF does not have, fail before
+/// anything is written.
 #[test]
 fn reach_writes_the_srdf_of_the_pairs_it_checked() {
     let dir = tempfile::tempdir().unwrap();
@@ -946,4 +947,23 @@ fn reach_writes_the_srdf_of_the_pairs_it_checked() {
         "{err}"
     );
     assert!(!json.exists());
+
+    // Capsules between joint origins lie on frames the mesh arm's URDF does not have: no SRDF
+    // can name them, so the run is refused before any work.
+    let caps = dir.path().join("caps.srdf");
+    let (ok, _, err) = kinsynth(&[
+        "reach",
+        "examples/scenarios/ur5-cell.toml",
+        "--urdf",
+        urdf.to_str().unwrap(),
+        "--body",
+        "capsules",
+        "--write-srdf",
+        caps.to_str().unwrap(),
+    ]);
+    assert!(
+        !ok && err.lines().count() == 1 && err.contains("caps.srdf") && err.contains("link1_dh"),
+        "{err}"
+    );
+    assert!(!caps.exists());
 }
