@@ -966,4 +966,22 @@ fn reach_writes_the_srdf_of_the_pairs_it_checked() {
         "{err}"
     );
     assert!(!caps.exists());
+    // For the same reason an SRDF cannot be applied to those capsules: refused, not ignored.
+    let (ok, _, err) = kinsynth(&[
+        "reach",
+        "examples/scenarios/ur5-cell.toml",
+        "--urdf",
+        urdf.to_str().unwrap(),
+        "--body",
+        "capsules",
+        "--srdf",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        !ok && err.lines().count() == 1
+            && err.contains("--srdf")
+            && err.contains("checked.srdf")
+            && err.contains("link1_dh"),
+        "{err}"
+    );
 }

@@ -989,6 +989,21 @@ pub fn load_robot(
         .map_err(|e| e.in_file(path))?;
     let mut out = robot_body(&robot, urdf, path, options).map_err(|e| e.in_file(path))?;
     if let Some(srdf) = &options.srdf {
+        // An SRDF names URDF links; bodies on other frames (capsules between joint origins of
+        // an arm whose links are named otherwise) would silently escape its pairs.
+        let body = &out.body;
+        if let Some(b) =
+            (0..body.len()).find(|&b| !out.urdf.carried.iter().any(|c| c.name == body.frame(b)))
+        {
+            return Err(Error::invalid(
+                "--srdf",
+                srdf.display(),
+                format!(
+                    "its pairs name the URDF's links, but the robot's bodies lie on frames the URDF does not have (such as '{}', with --body capsules); use --body collision",
+                    body.frame(b)
+                ),
+            ));
+        }
         let pairs = read_srdf(srdf, &robot, path)?;
         out.body.disable_pairs(&pairs);
     }
