@@ -949,39 +949,33 @@ fn reach_writes_the_srdf_of_the_pairs_it_checked() {
     assert!(!json.exists());
 
     // Capsules between joint origins lie on frames the mesh arm's URDF does not have: no SRDF
-    // can name them, so the run is refused before any work.
+    // can name them. Writing one is refused before any work, and an SRDF given for them is
+    // refused, not ignored.
     let caps = dir.path().join("caps.srdf");
-    let (ok, _, err) = kinsynth(&[
-        "reach",
-        "examples/scenarios/ur5-cell.toml",
-        "--urdf",
-        urdf.to_str().unwrap(),
-        "--body",
-        "capsules",
-        "--write-srdf",
-        caps.to_str().unwrap(),
-    ]);
-    assert!(
-        !ok && err.lines().count() == 1 && err.contains("caps.srdf") && err.contains("link1_dh"),
-        "{err}"
-    );
+    let with_capsules = |flag: &str, file: &Path| {
+        kinsynth(&[
+            "reach",
+            "examples/scenarios/ur5-cell.toml",
+            "--urdf",
+            urdf.to_str().unwrap(),
+            "--body",
+            "capsules",
+            flag,
+            file.to_str().unwrap(),
+        ])
+    };
+    for (flag, file, name) in [
+        ("--write-srdf", &caps, "caps.srdf"),
+        ("--srdf", &out, "checked.srdf"),
+    ] {
+        let (ok, _, err) = with_capsules(flag, file);
+        assert!(
+            !ok && err.lines().count() == 1
+                && err.contains(flag)
+                && err.contains(name)
+                && err.contains("link1_dh"),
+            "{flag}: {err}"
+        );
+    }
     assert!(!caps.exists());
-    // For the same reason an SRDF cannot be applied to those capsules: refused, not ignored.
-    let (ok, _, err) = kinsynth(&[
-        "reach",
-        "examples/scenarios/ur5-cell.toml",
-        "--urdf",
-        urdf.to_str().unwrap(),
-        "--body",
-        "capsules",
-        "--srdf",
-        out.to_str().unwrap(),
-    ]);
-    assert!(
-        !ok && err.lines().count() == 1
-            && err.contains("--srdf")
-            && err.contains("checked.srdf")
-            && err.contains("link1_dh"),
-        "{err}"
-    );
 }
