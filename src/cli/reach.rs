@@ -99,21 +99,15 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
     let mut group = None;
     let (chain, urdf_names, body) = match urdf.robot.load(&s)? {
         Some(r) => {
-            if let Some(path) = &write_srdf {
-                // An SRDF names URDF links: bodies on frames the URDF does not have (capsules
-                // between joint origins) cannot be written as one.
-                let links: std::collections::HashSet<&str> =
-                    r.urdf.carried.iter().map(|c| c.name.as_str()).collect();
-                if let Some(b) = (0..r.body.len()).find(|&b| !links.contains(r.body.frame(b))) {
-                    return Err(kinsynth::Error::invalid(
-                        "--write-srdf",
-                        path.display(),
-                        format!(
-                            "the robot's bodies lie on frames the URDF does not have (such as '{}', with --body capsules), which an SRDF cannot name; use --body collision",
-                            r.body.frame(b)
-                        ),
-                    ));
-                }
+            if let (Some(path), Some(frame)) = (&write_srdf, r.frame_not_in_urdf()) {
+                // An SRDF names URDF links: it cannot be written for these bodies.
+                return Err(kinsynth::Error::invalid(
+                    "--write-srdf",
+                    path.display(),
+                    format!(
+                        "the robot's bodies lie on frames the URDF does not have (such as '{frame}', with --body capsules), which an SRDF cannot name; use --body collision"
+                    ),
+                ));
             }
             let body = std::sync::Arc::new(r.body);
             group = Some((r.urdf.base, r.urdf.tip));

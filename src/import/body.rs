@@ -114,6 +114,17 @@ pub struct ImportedRobot {
     pub note: Option<String>,
 }
 
+impl ImportedRobot {
+    /// A frame carrying a body that is not one of the URDF's links between base and tip, if
+    /// any: with `--body capsules`, an arm whose links are not named like kinsynth's has its
+    /// capsules on frames of kinsynth's own (`link1_dh`, …), which no SRDF of the URDF can name.
+    pub fn frame_not_in_urdf(&self) -> Option<&str> {
+        (0..self.body.len())
+            .map(|b| self.body.frame(b))
+            .find(|f| !self.urdf.carried.iter().any(|c| c.name == *f))
+    }
+}
+
 /// One collision element, in its carrier frame.
 enum Piece {
     /// A capsule from `a` to `b` of radius `r`; `local` has the axis along z, `half` its half
@@ -991,16 +1002,12 @@ pub fn load_robot(
     if let Some(srdf) = &options.srdf {
         // An SRDF names URDF links; bodies on other frames (capsules between joint origins of
         // an arm whose links are named otherwise) would silently escape its pairs.
-        let body = &out.body;
-        if let Some(b) =
-            (0..body.len()).find(|&b| !out.urdf.carried.iter().any(|c| c.name == body.frame(b)))
-        {
+        if let Some(frame) = out.frame_not_in_urdf() {
             return Err(Error::invalid(
                 "--srdf",
                 srdf.display(),
                 format!(
-                    "its pairs name the URDF's links, but the robot's bodies lie on frames the URDF does not have (such as '{}', with --body capsules); use --body collision",
-                    body.frame(b)
+                    "its pairs name the URDF's links, but the robot's bodies lie on frames the URDF does not have (such as '{frame}', with --body capsules); use --body collision"
                 ),
             ));
         }
