@@ -94,10 +94,9 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         (Some(p), None, None) => kinsynth::optimize::runner::Replay::from_best(p)?,
         _ => None,
     };
-    // The SRDF's planning group: the imported robot's own base and tip frames, else the
-    // exported design's.
-    let mut group = None;
-    let (chain, urdf_names, body) = match urdf.robot.load(&s)? {
+    // `group`: the SRDF's planning group, an imported robot's own base and tip frames (none:
+    // the exported design's).
+    let (chain, urdf_names, body, group) = match urdf.robot.load(&s)? {
         Some(r) => {
             if let (Some(path), Some(frame)) = (&write_srdf, r.frame_not_in_urdf()) {
                 // An SRDF names URDF links: it cannot be written for these bodies.
@@ -110,12 +109,12 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
                 ));
             }
             let body = std::sync::Arc::new(r.body);
-            group = Some((r.urdf.base, r.urdf.tip));
-            (r.urdf.chain, Some(r.urdf.joint_names), Some(body))
+            let group = Some((r.urdf.base, r.urdf.tip));
+            (r.urdf.chain, Some(r.urdf.joint_names), Some(body), group)
         }
         None => match &design {
-            Some(p) => (kinsynth::Design::load(p)?.chain(), None, None),
-            None => (s.space.largest().chain(), None, None),
+            Some(p) => (kinsynth::Design::load(p)?.chain(), None, None, None),
+            None => (s.space.largest().chain(), None, None, None),
         },
     };
     if let Some(dir) = &urdf.trajectories {
