@@ -145,4 +145,21 @@ fn two_shards_merge_into_the_unsharded_tables() {
             && e.contains("is not the experiment of"),
         "{e}"
     );
+    // A manifest's slice out of its domain is refused before its workspaces are computed
+    // (`N = 0` divided by zero).
+    let manifest = other.join("experiment.json");
+    let text = read(&manifest);
+    for (bad, shown) in [("0", "1/0"), ("100001", "1/100001")] {
+        let mut m: serde_json::Value = serde_json::from_str(&text).unwrap();
+        m["shard"]["count"] = serde_json::json!(bad.parse::<u64>().unwrap());
+        std::fs::write(&manifest, serde_json::to_string(&m).unwrap()).unwrap();
+        let e = merge(std::slice::from_ref(&other), &dir.path().join("m4"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains(&manifest.display().to_string())
+                && e.contains(&format!("shard = {shown}: must be K/N")),
+            "{e}"
+        );
+    }
 }

@@ -242,6 +242,25 @@ fn a_checkpoint_state_of_the_wrong_length_is_an_error_not_a_panic() {
             "state.population[2].cost = -1e308: must be finite and not negative",
         ],
     );
+    c["state"]["population"][2]["cost"] = original["state"]["population"][2]["cost"].clone();
+    // The optimiser's own settings in the state are held to the scenario's rules: a
+    // population of 2^31 − 1 asked for 51 GB at the next generation.
+    for (field, value, says) in [
+        ("population", serde_json::json!(2147483647u64), "2..=10000"),
+        ("elites", serde_json::json!(32), "0..=31"),
+        ("crossover_rate", serde_json::json!(2.5), "[0, 1]"),
+    ] {
+        let mut m = c.clone();
+        m["state"]["params"][field] = value.clone();
+        std::fs::write(&path, serde_json::to_string(&m).unwrap()).unwrap();
+        one_line_error(
+            &resume(&out, &[]),
+            &[
+                "checkpoint.json",
+                &format!("state.params.{field} = {value}: must lie in {says}"),
+            ],
+        );
+    }
 }
 
 #[test]

@@ -17,9 +17,10 @@
 //! acceptance temperature restarts from the best cost's scale.
 
 use super::{
-    best_distinct, check_evaluated, check_len, check_points, evaluate_batch, keep_best,
-    random_point, Evaluated, Optimizer, StepContext, StepReport,
+    best_distinct, check_evaluated, check_len, check_points, check_setting, check_setting_count,
+    evaluate_batch, keep_best, random_point, Evaluated, Optimizer, StepContext, StepReport,
 };
+use crate::limits::{MAX_POPULATION, MAX_SETTING};
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -49,6 +50,40 @@ impl Default for AsaParams {
             expected_evaluations: 20_000,
             reanneal_interval: 100,
         }
+    }
+}
+
+impl AsaParams {
+    /// Checks settings read back from a checkpoint by the rules a scenario's
+    /// `[optimizer.asa]` obeys; the error names the field.
+    pub fn check(&self) -> Result<(), String> {
+        check_setting_count("batch", self.batch as u64, 1, MAX_POPULATION as u64)?;
+        check_setting(
+            "initial_temperature",
+            self.initial_temperature,
+            0.0,
+            MAX_SETTING,
+        )?;
+        if self.initial_temperature <= 0.0 {
+            return Err(format!(
+                "params.initial_temperature = {}: must be positive",
+                self.initial_temperature
+            ));
+        }
+        check_setting("temperature_ratio", self.temperature_ratio, 0.0, 1.0)?;
+        if self.temperature_ratio <= 0.0 {
+            return Err(format!(
+                "params.temperature_ratio = {}: must lie in (0, 1]",
+                self.temperature_ratio
+            ));
+        }
+        check_setting_count(
+            "expected_evaluations",
+            self.expected_evaluations,
+            1,
+            u64::MAX,
+        )?;
+        check_setting_count("reanneal_interval", self.reanneal_interval, 1, u64::MAX)
     }
 }
 
@@ -264,6 +299,7 @@ impl Optimizer for Asa {
     }
 
     fn validate(&self, dim: usize) -> Result<(), String> {
+        self.params.check()?;
         check_points(&self.seeds, self.best.as_ref(), dim)?;
         if let Some(c) = &self.current {
             check_evaluated("current", c, dim)?;

@@ -345,8 +345,18 @@ pub fn read_manifest(dir: &Path) -> Result<Manifest> {
         message: e.to_string(),
     })?;
     m.spec.validate().map_err(|e| e.in_file(&path))?;
+    // The slice as `--shard` accepts it, before its workspaces are computed from it.
+    let Shard { index, count } = m.shard;
+    if count == 0 || count > MAX_SHARDS || !(1..=count).contains(&index) {
+        return Err(crate::Error::invalid(
+            "shard",
+            m.shard,
+            format!("must be K/N with 1 ≤ K ≤ N ≤ {MAX_SHARDS}"),
+        )
+        .in_file(&path));
+    }
     let expected: Vec<usize> = m.shard.workspaces(m.spec.runs).collect();
-    if m.shard.index == 0 || m.shard.index > m.shard.count || m.workspaces != expected {
+    if m.workspaces != expected {
         return Err(crate::Error::invalid(
             "workspaces",
             format!("{:?}", m.workspaces),

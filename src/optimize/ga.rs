@@ -3,9 +3,10 @@
 //! sets a variable to zero, and elitism.
 
 use super::{
-    best_distinct, check_evaluated, check_points, evaluate_batch, keep_best, random_point,
-    Evaluated, Optimizer, StepContext, StepReport,
+    best_distinct, check_evaluated, check_points, check_setting, check_setting_count,
+    evaluate_batch, keep_best, random_point, Evaluated, Optimizer, StepContext, StepReport,
 };
+use crate::limits::{MAX_POPULATION, MAX_SETTING};
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -47,6 +48,29 @@ impl Default for GaParams {
             mutation_rate: None,
             zero_rate: None,
         }
+    }
+}
+
+impl GaParams {
+    /// Checks settings read back from a checkpoint by the rules a scenario's
+    /// `[optimizer.ga]` and `optimizer.population` obey, so that no state can stall or
+    /// exhaust memory; the error names the field, e.g. `params.population = 0: …`.
+    pub fn check(&self) -> Result<(), String> {
+        let max = MAX_POPULATION as u64;
+        check_setting_count("population", self.population as u64, 2, max)?;
+        check_setting_count("elites", self.elites as u64, 0, self.population as u64 - 1)?;
+        check_setting_count("tournament", self.tournament as u64, 1, max)?;
+        check_setting("crossover_rate", self.crossover_rate, 0.0, 1.0)?;
+        for (field, rate) in [
+            ("mutation_rate", self.mutation_rate),
+            ("zero_rate", self.zero_rate),
+        ] {
+            if let Some(v) = rate {
+                check_setting(field, v, 0.0, 1.0)?;
+            }
+        }
+        check_setting("eta_crossover", self.eta_crossover, 0.0, MAX_SETTING)?;
+        check_setting("eta_mutation", self.eta_mutation, 0.0, MAX_SETTING)
     }
 }
 
@@ -241,6 +265,7 @@ impl Optimizer for Ga {
     }
 
     fn validate(&self, dim: usize) -> Result<(), String> {
+        self.params.check()?;
         check_points(&self.seeds, self.best.as_ref(), dim)?;
         for (i, e) in self.population.iter().enumerate() {
             check_evaluated(&format!("population[{i}]"), e, dim)?;

@@ -9,9 +9,10 @@
 //! * `global`: the classic swarm, pulled toward its own best and the swarm's best.
 
 use super::{
-    best_distinct, check_evaluated, check_len, check_points, evaluate_batch, keep_best,
-    random_point, Evaluated, Optimizer, StepContext, StepReport,
+    best_distinct, check_evaluated, check_len, check_points, check_setting, check_setting_count,
+    evaluate_batch, keep_best, random_point, Evaluated, Optimizer, StepContext, StepReport,
 };
+use crate::limits::{MAX_POPULATION, MAX_SETTING};
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -63,6 +64,24 @@ impl Default for PsoParams {
             max_velocity: 0.2,
             refresh: 7,
         }
+    }
+}
+
+impl PsoParams {
+    /// Checks settings read back from a checkpoint by the rules a scenario's
+    /// `[optimizer.pso]` and `optimizer.population` obey; the error names the field.
+    pub fn check(&self) -> Result<(), String> {
+        check_setting_count("swarm", self.swarm as u64, 2, MAX_POPULATION as u64)?;
+        for (field, v) in [
+            ("inertia", self.inertia),
+            ("inertia_end", self.inertia_end),
+            ("cognitive", self.cognitive),
+            ("social", self.social),
+            ("max_velocity", self.max_velocity),
+        ] {
+            check_setting(field, v, 0.0, MAX_SETTING)?;
+        }
+        Ok(())
     }
 }
 
@@ -301,6 +320,7 @@ impl Optimizer for Pso {
     }
 
     fn validate(&self, dim: usize) -> Result<(), String> {
+        self.params.check()?;
         check_points(&self.seeds, self.best.as_ref(), dim)?;
         let n = self.particles.len();
         for (i, p) in self.particles.iter().enumerate() {
