@@ -50,10 +50,21 @@ pub const MAX_ITERATIONS: usize = 100_000;
 /// (100,000 iterations of a 24-axis design: 26 s).
 pub const MAX_ITERATION_AXES: usize = 2_400_000;
 
-/// The most RRT iterations a design of `axes` free axes may run: [`MAX_ITERATIONS`], and
-/// fewer for a design of more than 24 axes ([`MAX_ITERATION_AXES`]).
-pub fn iteration_cap(axes: usize) -> usize {
-    (MAX_ITERATION_AXES / axes.max(1)).clamp(1, MAX_ITERATIONS)
+/// Most RRT iterations times damped-least-squares steps per extension (`planner.ik_steps`)
+/// times the design's free axes: every goal-biased iteration solves inverse kinematics, each
+/// step an evaluation of the kinematics and the Jacobian, so a run whose task is out of reach
+/// costs about its iterations times its steps times its axes. The default 20 steps keep within
+/// [`MAX_ITERATION_AXES`] alone; 10,000 steps of a 24-axis design allow 200 iterations.
+pub const MAX_IK_AXIS_STEPS: usize = 20 * MAX_ITERATION_AXES;
+
+/// The most RRT iterations a design of `axes` free axes may run with `ik_steps`
+/// damped-least-squares steps per extension: [`MAX_ITERATIONS`], and fewer for a design of more
+/// than 24 axes ([`MAX_ITERATION_AXES`]) or more than 20 steps ([`MAX_IK_AXIS_STEPS`]).
+pub fn iteration_cap(axes: usize, ik_steps: usize) -> usize {
+    let axes = axes.max(1);
+    let by_search = MAX_ITERATION_AXES / axes;
+    let by_ik = MAX_IK_AXIS_STEPS / axes / ik_steps.max(1);
+    by_search.min(by_ik).clamp(1, MAX_ITERATIONS)
 }
 /// Most random configurations sampled for the allowed-collision matrix
 /// (`robot.self_collision_samples`; MoveIt's setup assistant offers up to 100,000).

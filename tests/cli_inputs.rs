@@ -641,8 +641,10 @@ fn scene_mesh_limit_counts_distinct_meshes() {
 
 /// Iterations cost more on designs of many axes (the nearest-node search scans the tree):
 /// iterations × the largest design's axes are at most 2,400,000, for `max_iterations` and the
-/// schedule's budgets; 64 links of six axes allow 6,250. The allowed-collision samples are at
-/// most 100,000.
+/// schedule's budgets; 64 links of six axes allow 6,250. Inverse kinematics makes them cost more
+/// with its steps: iterations × axes × `ik_steps` are at most 48,000,000, so 10,000 steps
+/// allow 12 iterations there (10,000 steps on 8 axes for 100,000 iterations ran for minutes).
+/// The allowed-collision samples are at most 100,000.
 #[test]
 fn iteration_limit_shrinks_with_the_axes() {
     let dir = tempfile::tempdir().unwrap();
@@ -662,6 +664,16 @@ fn iteration_limit_shrinks_with_the_axes() {
             "schedule = { l_max = [0.5, 0.2], iterations = [2000, 100000] }",
             false,
             vec!["planner.schedule.iterations = 100000", "at most 6250"],
+        ),
+        ("max_iterations = 12\nik_steps = 10000", true, vec![]),
+        (
+            "max_iterations = 13\nik_steps = 10000",
+            false,
+            vec![
+                "planner.max_iterations = 13",
+                "planner.ik_steps is 10000",
+                "at most 12 iterations",
+            ],
         ),
     ] {
         let p = write(

@@ -61,7 +61,7 @@ pub struct PlannerConfig {
     /// How far the iteration budget grows: while an unreached task has a backward tree (a
     /// collision-free posture on it is known), a run may use up to `budget_growth ×
     /// max_iterations` iterations (at most [`crate::limits::iteration_cap`] of the design's
-    /// axes); otherwise it stops at
+    /// axes and `ik_steps`); otherwise it stops at
     /// `max_iterations`. 1 keeps the budget fixed. Default 5.
     pub budget_growth: usize,
     /// How `l_max` and `max_iterations` change as an optimisation progresses (paper §V).

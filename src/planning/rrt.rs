@@ -665,7 +665,7 @@ impl<'a> Rrt<'a> {
     /// chain's reach bound: the others cannot be, see [`Chain::reach_bound`]), for up to
     /// `config.max_iterations` iterations, or up to `budget_growth` times as many while an
     /// unreached task has a backward tree ([`budgets`]: both at most
-    /// [`crate::limits::iteration_cap`] of the design's axes; a collision-free posture
+    /// [`crate::limits::iteration_cap`] of the design's axes and IK steps; a collision-free posture
     /// on the task is known, so more work is likely to pay), and within the time cap if set.
     /// Each iteration is, with probability `goal_bias`, a goal-biased one: greedy extensions
     /// toward IK goals of an unreached task, whose collision-free postures on the task root the
@@ -714,6 +714,7 @@ impl<'a> Rrt<'a> {
             self.config.max_iterations,
             self.config.budget_growth,
             chain.dof(),
+            self.config.ik_steps,
         );
         let start = Instant::now();
         let mut iterations = 0;
@@ -765,9 +766,15 @@ impl<'a> Rrt<'a> {
 
 /// The iteration budgets of a planner run on a design of `axes` free axes: the base budget
 /// `max_iterations` and the grown one, `budget_growth` times as many, both within
-/// [`iteration_cap`] of the axes (100,000 iterations up to 24 axes, fewer beyond).
-pub fn budgets(max_iterations: usize, budget_growth: usize, axes: usize) -> (usize, usize) {
-    let cap = iteration_cap(axes);
+/// [`iteration_cap`] of the axes and inverse-kinematics steps per extension (100,000
+/// iterations up to 24 axes and 20 steps, fewer beyond).
+pub fn budgets(
+    max_iterations: usize,
+    budget_growth: usize,
+    axes: usize,
+    ik_steps: usize,
+) -> (usize, usize) {
+    let cap = iteration_cap(axes, ik_steps);
     let base = max_iterations.min(cap);
     let grown = base.saturating_mul(budget_growth).min(cap).max(base);
     (base, grown)
@@ -897,13 +904,17 @@ mod tests {
     #[test]
     fn budgets_shrink_with_the_axes_beyond_24() {
         // Up to 24 axes: the configured budget, grown up to 100,000.
-        assert_eq!(budgets(2_000, 5, 8), (2_000, 10_000));
-        assert_eq!(budgets(100_000, 5, 24), (100_000, 100_000));
-        assert_eq!(budgets(30_000, 100, 2), (30_000, 100_000));
+        assert_eq!(budgets(2_000, 5, 8, 20), (2_000, 10_000));
+        assert_eq!(budgets(100_000, 5, 24, 20), (100_000, 100_000));
+        assert_eq!(budgets(30_000, 100, 2, 20), (30_000, 100_000));
         // 384 axes (64 links of six): at most 2,400,000 / 384 = 6,250 iterations.
-        assert_eq!(budgets(100_000, 5, 384), (6_250, 6_250));
-        assert_eq!(budgets(2_000, 5, 384), (2_000, 6_250));
-        assert_eq!(budgets(2_000, 1, 48), (2_000, 2_000));
-        assert_eq!(budgets(60_000, 2, 48), (50_000, 50_000));
+        assert_eq!(budgets(100_000, 5, 384, 20), (6_250, 6_250));
+        assert_eq!(budgets(2_000, 5, 384, 20), (2_000, 6_250));
+        assert_eq!(budgets(2_000, 1, 48, 20), (2_000, 2_000));
+        assert_eq!(budgets(60_000, 2, 48, 20), (50_000, 50_000));
+        // Inverse-kinematics steps beyond 20 lower the cap in proportion.
+        assert_eq!(budgets(100_000, 5, 24, 10_000), (200, 200));
+        assert_eq!(budgets(2_000, 5, 24, 100), (2_000, 10_000));
+        assert_eq!(budgets(100_000, 1, 8, 1), (100_000, 100_000));
     }
 }

@@ -272,9 +272,11 @@ impl Scenario {
         let space = Self::design_space(spec)?;
         let workspace = Self::workspace(spec, dir)?;
         spec.planner.validate()?;
-        // The nearest-node search makes iterations cost more on designs of many axes.
+        // The nearest-node search and the inverse kinematics make iterations cost more on
+        // designs of many axes, and with many IK steps.
         let axes = space.largest().chain().dof();
-        let cap = crate::limits::iteration_cap(axes);
+        let ik_steps = spec.planner.ik_steps;
+        let cap = crate::limits::iteration_cap(axes, ik_steps);
         let schedule = spec.planner.schedule.iter().flat_map(|s| s.iterations);
         for (field, n) in std::iter::once(("planner.max_iterations", spec.planner.max_iterations))
             .chain(schedule.map(|n| ("planner.schedule.iterations", n)))
@@ -284,9 +286,11 @@ impl Scenario {
                 field,
                 n,
                 &format!(
-                    "the largest design has {axes} free axes, which allows at most {cap} \
-                     iterations (iterations × axes at most {})",
-                    crate::limits::MAX_ITERATION_AXES
+                    "the largest design has {axes} free axes and planner.ik_steps is \
+                     {ik_steps}, which allow at most {cap} iterations (iterations × axes at \
+                     most {}, iterations × axes × IK steps at most {})",
+                    crate::limits::MAX_ITERATION_AXES,
+                    crate::limits::MAX_IK_AXIS_STEPS
                 ),
             )?;
         }
