@@ -312,3 +312,48 @@ impl Optimizer for Asa {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Settings read back from a checkpoint obey a scenario's rules: a batch of 2^40 asked
+    /// for memory, a ratio of 0 or a temperature of 0 would stall the schedule.
+    #[test]
+    fn restored_settings_are_checked() {
+        assert_eq!(AsaParams::default().check(), Ok(()));
+        for (p, says) in [
+            (
+                AsaParams {
+                    batch: 1 << 40,
+                    ..AsaParams::default()
+                },
+                "params.batch = 1099511627776: must lie in 1..=10000",
+            ),
+            (
+                AsaParams {
+                    temperature_ratio: 0.0,
+                    ..AsaParams::default()
+                },
+                "params.temperature_ratio = 0: must lie in (0, 1]",
+            ),
+            (
+                AsaParams {
+                    initial_temperature: f64::NAN,
+                    ..AsaParams::default()
+                },
+                "params.initial_temperature = NaN",
+            ),
+            (
+                AsaParams {
+                    reanneal_interval: 0,
+                    ..AsaParams::default()
+                },
+                "params.reanneal_interval = 0",
+            ),
+        ] {
+            let e = p.check().unwrap_err();
+            assert!(e.starts_with(says), "{e}");
+        }
+    }
+}

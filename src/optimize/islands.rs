@@ -712,6 +712,24 @@ fn check_resume(c: &Checkpoint, n: usize) -> Result<()> {
             ),
         ));
     }
+    // The migration settings by a scenario's rules (a count of 10^9 asked for memory at the
+    // first migration).
+    let Migration { interval, count } = i.migration;
+    let max_interval = crate::limits::MAX_ITERATIONS;
+    if !(1..=max_interval).contains(&interval) {
+        return Err(Error::invalid(
+            "islands.migration.interval",
+            interval,
+            format!("must lie in 1..={max_interval}"),
+        ));
+    }
+    if count > crate::limits::MAX_POPULATION {
+        return Err(Error::invalid(
+            "islands.migration.count",
+            count,
+            format!("must lie in 0..={}", crate::limits::MAX_POPULATION),
+        ));
+    }
     let states = c.state.as_array().map_or(0, Vec::len);
     if states != n || i.evaluations.len() != n {
         return Err(Error::invalid(
