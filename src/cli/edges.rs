@@ -94,6 +94,24 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
     );
     for l in lmax {
         let edges = oracle::sample_edges(&scene, &chain, &body, l, s.planner.lambda, count, seed);
+        if edges.is_empty() {
+            return Err(kinsynth::Error::Parse {
+                file: file.clone(),
+                message: format!(
+                    "no collision-free start for the largest design in {} attempts (every \
+                     sampled configuration collides with an obstacle or with itself): no edge \
+                     to compare",
+                    oracle::start_attempts(&body, count)
+                ),
+            });
+        }
+        if edges.len() < count {
+            say!(
+                "{:>8.4} only {} of {count} edges: collision-free starts are rare",
+                l,
+                edges.len()
+            );
+        }
         let verdicts: Vec<_> = edges
             .iter()
             .map(|(a, b)| oracle::judge_edge(&scene, &chain, &body, a, b, substeps))

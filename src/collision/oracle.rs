@@ -66,6 +66,18 @@ pub fn judge_edge(
     }
 }
 
+/// Bodies and self pairs checked, over all attempts, in the search of [`sample_edges`] for
+/// collision-free starts (the bundled arms check about 100 per attempt, so this allows some
+/// 200,000 attempts; 64 links of six axes about 630).
+pub const START_CHECK_BUDGET: usize = 20_000_000;
+
+/// How many random starts [`sample_edges`] tries for `count` edges at most: 1,000 per edge and
+/// 10,000 more, within [`START_CHECK_BUDGET`] bodies and pairs checked.
+pub fn start_attempts(body: &RobotBody, count: usize) -> usize {
+    let per_attempt = 1 + body.len() + body.self_pairs().len();
+    (1000 * count + 10_000).min(START_CHECK_BUDGET / per_attempt)
+}
+
 /// Random edges like the planner's: a start configuration drawn uniformly in the ranges whose
 /// body is clear (every body and self pair, by exact distance), steered toward another uniform sample and cut
 /// back (by bisection on the step parameter) until the step metric of paper Eq. 10,
@@ -90,10 +102,14 @@ pub fn sample_edges(
         chain.sample_config(rng, &mut q);
         q
     };
+    // Each start is checked with every body and self pair: the attempts are bounded by that
+    // work too, so that an arm of thousands of pairs whose starts hardly ever come free does
+    // not search for minutes (64 links of six axes: 31,626 pairs, 2.7 ms per attempt).
+    let max_attempts = start_attempts(body, count);
     let mut attempts = 0usize;
     while out.len() < count {
         attempts += 1;
-        if attempts > 1000 * count + 10_000 {
+        if attempts > max_attempts {
             break; // hardly any collision-free start: return what was found
         }
         let a = draw(&mut rng);
