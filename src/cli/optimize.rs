@@ -191,7 +191,18 @@ pub fn prepare(args: &Args) -> Result<Prepared, kinsynth::Error> {
             ))
         }
     };
-    let s = Scenario::load(&scenario_path)?;
+    let s = Scenario::load(&scenario_path).map_err(|e| match (&checkpoint, e) {
+        // The scenario the checkpoint names cannot be read: say where the name comes from.
+        (Some(_), kinsynth::Error::Read { path, source }) if args.file.is_none() => {
+            kinsynth::Error::invalid(
+                "scenario",
+                path.display(),
+                format!("cannot read the scenario this checkpoint records: {source}"),
+            )
+            .in_file(out.join(kinsynth::optimize::output::files::CHECKPOINT))
+        }
+        (_, e) => e,
+    })?;
     let settings = |checkpoint: &Option<Checkpoint>| match checkpoint {
         Some(c) => {
             let mut options = c.options.clone();

@@ -548,6 +548,9 @@ impl<'r, 'a> IslandJob<'r, 'a> {
                 evaluations,
             });
         }
+        if rank == 0 {
+            setup.warn();
+        }
         Ok((setup, local))
     }
 

@@ -448,6 +448,18 @@ pub(crate) struct Setup {
     pub hash: String,
     /// The scenario's shape.
     pub shape: ScenarioShape,
+    /// A warning about the checkpoint resumed, printed once the whole checkpoint is known to
+    /// be good (an error about it then stays alone on one line).
+    pub warning: Option<String>,
+}
+
+impl Setup {
+    /// Prints the warning, if any, to standard error (once the checkpoint has loaded).
+    pub(crate) fn warn(&self) {
+        if let Some(w) = &self.warning {
+            eprintln!("warning: {w}");
+        }
+    }
 }
 
 /// The end of a run, as [`Runner::conclude`] takes it.
@@ -603,9 +615,11 @@ impl<'a> Runner<'a> {
                     )
                     .in_file(self.checkpoint_path()));
                 }
+                let optimizer = load_optimizer(o.algorithm, c.state, self.scenario.space.dim())
+                    .map_err(|e| e.in_file(self.checkpoint_path()))?;
+                setup.warn();
                 (
-                    load_optimizer(o.algorithm, c.state, self.scenario.space.dim())
-                        .map_err(|e| e.in_file(self.checkpoint_path()))?,
+                    optimizer,
                     c.generation,
                     c.evaluations,
                     c.elapsed_s,
@@ -724,8 +738,10 @@ impl<'a> Runner<'a> {
                 })?;
         let hash = fingerprint(&scenario_bytes);
         let shape = ScenarioShape::of(self.scenario);
+        let mut warning = None;
         if let Some(c) = resume {
-            self.check_binding(c, &hash, &shape)
+            warning = self
+                .check_binding(c, &hash, &shape)
                 .map_err(|e| e.in_file(&checkpoint_path))?;
             check_planner(&self.planner).map_err(|e| e.in_file(&checkpoint_path))?;
         }
@@ -738,6 +754,7 @@ impl<'a> Runner<'a> {
             objective,
             hash,
             shape,
+            warning,
         })
     }
 
@@ -838,8 +855,14 @@ impl<'a> Runner<'a> {
     }
 
     /// Refuses a checkpoint that does not belong to the scenario: another file, or the same
-    /// file edited since the run started. The error says what changed.
-    fn check_binding(&self, c: &Checkpoint, hash: &str, shape: &ScenarioShape) -> Result<()> {
+    /// file edited since the run started. The error says what changed. A checkpoint that
+    /// records no hash gives a warning instead.
+    fn check_binding(
+        &self,
+        c: &Checkpoint,
+        hash: &str,
+        shape: &ScenarioShape,
+    ) -> Result<Option<String>> {
         let scenario = self.scenario_path.display();
         if let Some(was) = &c.scenario_shape {
             if let Some(d) = was.difference(shape) {
@@ -856,14 +879,11 @@ impl<'a> Runner<'a> {
                 &scenario,
                 format!("has changed since the checkpoint: its contents hash {hash}, the checkpoint's {was}; --resume needs the scenario the run started with"),
             )),
-            Some(_) => Ok(()),
-            None => {
-                eprintln!(
-                    "warning: {}: the checkpoint records no scenario hash (an older version wrote it); {scenario} is not checked against it",
-                    self.out.join(files::CHECKPOINT).display()
-                );
-                Ok(())
-            }
+            Some(_) => Ok(None),
+            None => Ok(Some(format!(
+                "{}: the checkpoint records no scenario hash (an older version wrote it); {scenario} is not checked against it",
+                self.out.join(files::CHECKPOINT).display()
+            ))),
         }
     }
 
