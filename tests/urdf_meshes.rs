@@ -973,9 +973,38 @@ fn reach_writes_the_srdf_of_the_pairs_it_checked() {
             !ok && err.lines().count() == 1
                 && err.contains(flag)
                 && err.contains(name)
-                && err.contains("link1_dh"),
+                && err.contains("link1_dh")
+                && err.contains("with --body capsules"),
             "{flag}: {err}"
         );
     }
+    assert!(!caps.exists());
+    // Without <collision> elements the capsules stand in for the geometry under the default
+    // --body collision: the refusal says so, not that capsules were asked for.
+    let text = std::fs::read_to_string(&urdf).unwrap();
+    let mut bare = String::new();
+    let mut rest = text.as_str();
+    while let Some(i) = rest.find("<collision") {
+        bare.push_str(&rest[..i]);
+        let end = rest[i..].find("</collision>").unwrap() + i + "</collision>".len();
+        rest = &rest[end..];
+    }
+    bare.push_str(rest);
+    let bare_urdf = dir.path().join("bare.urdf");
+    std::fs::write(&bare_urdf, bare).unwrap();
+    let (ok, _, err) = kinsynth(&[
+        "reach",
+        "examples/scenarios/ur5-cell.toml",
+        "--urdf",
+        bare_urdf.to_str().unwrap(),
+        "--write-srdf",
+        caps.to_str().unwrap(),
+    ]);
+    assert!(
+        !ok && err.lines().count() == 1
+            && err.contains("no <collision> geometry")
+            && !err.contains("--body capsules"),
+        "{err}"
+    );
     assert!(!caps.exists());
 }

@@ -106,8 +106,8 @@ pub struct UrdfRobot {
 
 impl UrdfRobot {
     /// The URDF robot of `--urdf` with its body, for the scenario `s` (its point colliders and
-    /// self-collision settings), or `None` without `--urdf`. A note from the import goes to
-    /// stderr.
+    /// self-collision settings), or `None` without `--urdf`. Its note, if any, is for
+    /// [`UrdfRobot::announce`] once the command has checked what it needs of the robot.
     pub fn load(
         &self,
         s: &kinsynth::Scenario,
@@ -129,10 +129,15 @@ impl UrdfRobot {
             s.space.template().colliders_per_link,
             &options,
         )?;
-        if let Some(note) = &r.note {
+        Ok(Some(r))
+    }
+
+    /// Prints the note of the import of `r` to stderr, if it has one (after the command's own
+    /// checks, so that an error stays alone on its line).
+    pub fn announce(&self, r: &kinsynth::import::ImportedRobot) {
+        if let (Some(p), Some(note)) = (&self.urdf, &r.note) {
             eprintln!("note: {}: {note}", p.display());
         }
-        Ok(Some(r))
     }
 }
 

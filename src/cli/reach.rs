@@ -98,16 +98,15 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
     // the exported design's).
     let (chain, urdf_names, body, group) = match urdf.robot.load(&s)? {
         Some(r) => {
-            if let (Some(path), Some(frame)) = (&write_srdf, r.frame_not_in_urdf()) {
+            if let (Some(path), Some(why)) = (&write_srdf, r.srdf_cannot_name()) {
                 // An SRDF names URDF links: it cannot be written for these bodies.
                 return Err(kinsynth::Error::invalid(
                     "--write-srdf",
                     path.display(),
-                    format!(
-                        "the robot's bodies lie on frames the URDF does not have (such as '{frame}', with --body capsules), which an SRDF cannot name; use --body collision"
-                    ),
+                    format!("an SRDF names the URDF's links, but {why}"),
                 ));
             }
+            urdf.robot.announce(&r);
             let body = std::sync::Arc::new(r.body);
             let group = Some((r.urdf.base, r.urdf.tip));
             (r.urdf.chain, Some(r.urdf.joint_names), Some(body), group)

@@ -32,7 +32,10 @@ pub struct Args {
 pub fn run(args: Args) -> Result<(), kinsynth::Error> {
     let s = Scenario::load(&args.file)?;
     let (chain, joint_names, body) = match args.robot.load(&s)? {
-        Some(r) => (r.urdf.chain, Some(r.urdf.joint_names), r.body),
+        Some(r) => {
+            args.robot.announce(&r);
+            (r.urdf.chain, Some(r.urdf.joint_names), r.body)
+        }
         None => {
             let chain = match &args.design {
                 Some(p) => kinsynth::Design::load(p)?.chain(),

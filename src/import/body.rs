@@ -123,6 +123,22 @@ impl ImportedRobot {
             .map(|b| self.body.frame(b))
             .find(|f| !self.urdf.carried.iter().any(|c| c.name == *f))
     }
+
+    /// Why an SRDF cannot name this robot's bodies, when it cannot ([`Self::frame_not_in_urdf`]),
+    /// with what to do about it: `--body capsules` was asked for, or the URDF has no collision
+    /// geometry to use instead.
+    pub fn srdf_cannot_name(&self) -> Option<String> {
+        let frame = self.frame_not_in_urdf()?;
+        Some(if self.note.is_some() {
+            format!(
+                "the robot's bodies lie on frames the URDF does not have (such as '{frame}': the URDF has no <collision> geometry between base and tip, so capsules between joint origins stand in for it); give the URDF's links <collision> elements"
+            )
+        } else {
+            format!(
+                "the robot's bodies lie on frames the URDF does not have (such as '{frame}', with --body capsules); use --body collision"
+            )
+        })
+    }
 }
 
 /// One collision element, in its carrier frame.
@@ -1002,13 +1018,11 @@ pub fn load_robot(
     if let Some(srdf) = &options.srdf {
         // An SRDF names URDF links; bodies on other frames (capsules between joint origins of
         // an arm whose links are named otherwise) would silently escape its pairs.
-        if let Some(frame) = out.frame_not_in_urdf() {
+        if let Some(why) = out.srdf_cannot_name() {
             return Err(Error::invalid(
                 "--srdf",
                 srdf.display(),
-                format!(
-                    "its pairs name the URDF's links, but the robot's bodies lie on frames the URDF does not have (such as '{frame}', with --body capsules); use --body collision"
-                ),
+                format!("its pairs name the URDF's links, but {why}"),
             ));
         }
         let pairs = read_srdf(srdf, &robot, path)?;
