@@ -988,3 +988,22 @@ fn deep_dotted_header_names_the_limit() {
         ],
     );
 }
+
+/// A key given twice is named (the reader said only "duplicate key", with its line).
+#[test]
+fn duplicate_key_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    for (text, parts) in [
+        (
+            "seed = 1\nseed = 2\n",
+            ["line 2, column 1", "duplicate key `seed`"],
+        ),
+        (
+            "[robot]\nlinks = 2\n[robot]\nlinks = 3\n",
+            ["line 3", "duplicate key `robot`"],
+        ),
+    ] {
+        let p = write(dir.path(), "dup.toml", &format!("{text}{TASK}"));
+        rejected(&check(&p), &["dup.toml", parts[0], parts[1]]);
+    }
+}

@@ -253,6 +253,14 @@ impl Scenario {
                 );
             } else {
                 m.push_str(&message);
+                // The reader names no key it finds twice: the key is the text it points at.
+                let key = e.span().and_then(|s| text.get(s)).map(str::trim);
+                if let Some(key) =
+                    key.filter(|k| message.trim() == "duplicate key" && !k.is_empty())
+                {
+                    let key: String = key.lines().next().unwrap_or("").chars().take(80).collect();
+                    m.push_str(&format!(" `{key}`"));
+                }
             }
             parse_error(m.trim_end().to_string())
         };
