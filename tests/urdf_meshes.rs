@@ -952,14 +952,15 @@ fn reach_writes_the_srdf_of_the_pairs_it_checked() {
     // can name them. Writing one is refused before any work, and an SRDF given for them is
     // refused, not ignored.
     let caps = dir.path().join("caps.srdf");
-    let with_capsules = |flag: &str, file: &Path| {
+    // `reach` of the cell with the robot of `urdf`, its body `body`, and `flag file`.
+    let reach_with = |urdf: &Path, body: &str, flag: &str, file: &Path| {
         kinsynth(&[
             "reach",
             "examples/scenarios/ur5-cell.toml",
             "--urdf",
             urdf.to_str().unwrap(),
             "--body",
-            "capsules",
+            body,
             flag,
             file.to_str().unwrap(),
         ])
@@ -968,7 +969,7 @@ fn reach_writes_the_srdf_of_the_pairs_it_checked() {
         ("--write-srdf", &caps, "caps.srdf"),
         ("--srdf", &out, "checked.srdf"),
     ] {
-        let (ok, _, err) = with_capsules(flag, file);
+        let (ok, _, err) = reach_with(&urdf, "capsules", flag, file);
         assert!(
             !ok && err.lines().count() == 1
                 && err.contains(flag)
@@ -992,14 +993,7 @@ fn reach_writes_the_srdf_of_the_pairs_it_checked() {
     bare.push_str(rest);
     let bare_urdf = dir.path().join("bare.urdf");
     std::fs::write(&bare_urdf, bare).unwrap();
-    let (ok, _, err) = kinsynth(&[
-        "reach",
-        "examples/scenarios/ur5-cell.toml",
-        "--urdf",
-        bare_urdf.to_str().unwrap(),
-        "--write-srdf",
-        caps.to_str().unwrap(),
-    ]);
+    let (ok, _, err) = reach_with(&bare_urdf, "collision", "--write-srdf", &caps);
     assert!(
         !ok && err.lines().count() == 1
             && err.contains("no <collision> geometry")

@@ -322,33 +322,26 @@ mod tests {
     #[test]
     fn restored_settings_are_checked() {
         assert_eq!(AsaParams::default().check(), Ok(()));
+        let with = |change: fn(&mut AsaParams)| {
+            let mut p = AsaParams::default();
+            change(&mut p);
+            p
+        };
         for (p, says) in [
             (
-                AsaParams {
-                    batch: 1 << 40,
-                    ..AsaParams::default()
-                },
+                with(|p| p.batch = 1 << 40),
                 "params.batch = 1099511627776: must lie in 1..=10000",
             ),
             (
-                AsaParams {
-                    temperature_ratio: 0.0,
-                    ..AsaParams::default()
-                },
+                with(|p| p.temperature_ratio = 0.0),
                 "params.temperature_ratio = 0: must lie in (0, 1]",
             ),
             (
-                AsaParams {
-                    initial_temperature: f64::NAN,
-                    ..AsaParams::default()
-                },
+                with(|p| p.initial_temperature = f64::NAN),
                 "params.initial_temperature = NaN",
             ),
             (
-                AsaParams {
-                    reanneal_interval: 0,
-                    ..AsaParams::default()
-                },
+                with(|p| p.reanneal_interval = 0),
                 "params.reanneal_interval = 0",
             ),
         ] {
