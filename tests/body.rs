@@ -422,23 +422,28 @@ fn kinsynth(args: &[&str]) -> std::process::Output {
         .unwrap()
 }
 
+/// Runs `kinsynth` and asserts that it succeeds (showing its stderr when it does not).
+fn kinsynth_ok(args: &[&str]) {
+    let out = kinsynth(args);
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 #[test]
 fn urdf_writes_the_srdf_beside_the_urdf() {
     let dir = tempfile::tempdir().unwrap();
     let design = dir.path().join("d.json");
     std::fs::write(&design, serde_json::to_string(&folding_arm()).unwrap()).unwrap();
     let urdf = dir.path().join("arm.urdf");
-    let out = kinsynth(&[
+    kinsynth_ok(&[
         "urdf",
         design.to_str().unwrap(),
         "-o",
         urdf.to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let srdf = std::fs::read_to_string(dir.path().join("arm.srdf")).unwrap();
     assert!(srdf.contains("<robot name=\"arm\">"));
     assert!(srdf.contains(
@@ -451,7 +456,7 @@ fn urdf_writes_the_srdf_beside_the_urdf() {
         "[robot]\nlinks = 2\nself_collision = false\n[robot.uniform]\na = 0.3\n[[task]]\npoint = [0.5, 0, 0]\n",
     )
     .unwrap();
-    let out = kinsynth(&[
+    kinsynth_ok(&[
         "urdf",
         design.to_str().unwrap(),
         "-o",
@@ -459,11 +464,6 @@ fn urdf_writes_the_srdf_beside_the_urdf() {
         "--scenario",
         scenario.to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let srdf = std::fs::read_to_string(dir.path().join("arm.srdf")).unwrap();
     assert!(
         srdf.contains("link1=\"link2_dh\" link2=\"link4_dh\" reason=\"User\""),
@@ -471,7 +471,7 @@ fn urdf_writes_the_srdf_beside_the_urdf() {
     );
     // `reach --write-srdf` on the design writes the same matrix as `urdf`.
     let written = dir.path().join("arm2.srdf");
-    let out = kinsynth(&[
+    kinsynth_ok(&[
         "reach",
         scenario.to_str().unwrap(),
         "--design",
@@ -479,11 +479,6 @@ fn urdf_writes_the_srdf_beside_the_urdf() {
         "--write-srdf",
         written.to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let again = std::fs::read_to_string(&written).unwrap();
     assert_eq!(again.replace("\"arm2\"", "\"arm\""), srdf);
 }

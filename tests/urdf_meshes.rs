@@ -33,6 +33,15 @@ fn import(path: &Path, options: &ImportOptions) -> ImportedRobot {
     load_robot(path, None, None, None, 3, options).unwrap()
 }
 
+/// The robot of `path` imported with the pairs of the SRDF `srdf` left unchecked.
+fn import_with_srdf(path: &Path, srdf: PathBuf) -> ImportedRobot {
+    let options = ImportOptions {
+        srdf: Some(srdf),
+        ..ImportOptions::default()
+    };
+    import(path, &options)
+}
+
 fn arm() -> ImportedRobot {
     import(&arm_urdf(), &ImportOptions::default())
 }
@@ -498,13 +507,7 @@ fn srdf_pairs_are_never_checked() {
 "#,
     )
     .unwrap();
-    let s = import(
-        &arm_urdf(),
-        &ImportOptions {
-            srdf: Some(srdf),
-            ..ImportOptions::default()
-        },
-    );
+    let s = import_with_srdf(&arm_urdf(), srdf);
     assert!(!find(&s.body, "link1", "link3"));
     assert!(!find(&s.body, "base_link", "link4"));
     assert_eq!(
@@ -906,13 +909,7 @@ fn reach_writes_the_srdf_of_the_pairs_it_checked() {
     assert!(ok, "{err}");
     assert!(stdout.contains("checked.srdf"), "{stdout}");
     let text = std::fs::read_to_string(&out).unwrap();
-    let body = import(
-        &urdf,
-        &ImportOptions {
-            srdf: Some(given),
-            ..ImportOptions::default()
-        },
-    );
+    let body = import_with_srdf(&urdf, given);
     assert!(text.contains(&format!(
         "<chain base_link=\"{}\" tip_link=\"{}\"/>",
         body.urdf.base, body.urdf.tip
@@ -923,13 +920,7 @@ fn reach_writes_the_srdf_of_the_pairs_it_checked() {
         body.body.acm().disabled().len()
     );
     // Read back, the written SRDF leaves exactly the pairs the run checked.
-    let again = import(
-        &urdf,
-        &ImportOptions {
-            srdf: Some(out.clone()),
-            ..ImportOptions::default()
-        },
-    );
+    let again = import_with_srdf(&urdf, out.clone());
     assert_eq!(again.body.self_pairs(), body.body.self_pairs());
     assert!(body.body.self_pairs().len() < arm().body.self_pairs().len());
 

@@ -255,18 +255,10 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
                 &built
             }
         };
-        let name = path
-            .file_stem()
-            .and_then(|n| n.to_str())
-            .filter(|n| !n.is_empty())
-            .unwrap_or("kinsynth_robot");
-        let text = match &group {
-            Some((base, tip)) => {
-                kinsynth::export::srdf::chain_body_to_srdf(checked, name, base, tip)
-            }
-            None => kinsynth::export::srdf::body_to_srdf(checked, name),
-        };
-        kinsynth::io::write_atomic(path, text.as_bytes())?;
+        let group = group
+            .as_ref()
+            .map(|(base, tip)| (base.as_str(), tip.as_str()));
+        kinsynth::export::srdf::write_body_srdf(checked, group, path)?;
         say!(
             "wrote {} ({} pairs never checked)",
             path.display(),

@@ -46,10 +46,10 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
     kinsynth::io::check_output_file(&output)?;
     kinsynth::io::check_output_file(&srdf)?;
     kinsynth::export::write_urdf(&d, &output)?;
-    kinsynth::export::write_srdf(&d, &config, &srdf)?;
+    let body = kinsynth::collision::RobotBody::new(&d.chain(), Vec::new(), &config);
+    kinsynth::export::srdf::write_body_srdf(&body, None, &srdf)?;
     // A design folded through itself at home is exported as it is (its SRDF keeps the crossing
     // pair enabled), but it cannot start any motion: say so.
-    let body = kinsynth::collision::RobotBody::new(&d.chain(), Vec::new(), &config);
     if let Some((a, b)) = body.acm().home_fold() {
         eprintln!(
             "warning: {}: the home pose self-collides: the bodies of link {a} and link {b} cross each other (the SRDF keeps the pair enabled; reachability is 0)",

@@ -71,12 +71,24 @@ pub fn design_to_srdf(design: &Design, config: &SelfCollisionConfig, name: &str)
 /// Writes the SRDF of `design` to `path` atomically; the robot is named after the file stem
 /// (as [`crate::export::urdf::write_urdf`] names the URDF).
 pub fn write_srdf(design: &Design, config: &SelfCollisionConfig, path: &Path) -> Result<()> {
+    let body = RobotBody::new(&design.chain(), Vec::new(), config);
+    write_body_srdf(&body, None, path)
+}
+
+/// Writes the SRDF of the robot body `body` to `path` atomically, the robot named after the
+/// file stem: the planning group is the chain from `group`'s base to its tip (URDF links of an
+/// imported robot), or an exported design's ([`body_to_srdf`]) without one.
+pub fn write_body_srdf(body: &RobotBody, group: Option<(&str, &str)>, path: &Path) -> Result<()> {
     let name = path
         .file_stem()
         .and_then(|s| s.to_str())
         .filter(|s| !s.is_empty())
         .unwrap_or("kinsynth_robot");
-    crate::io::write_atomic(path, design_to_srdf(design, config, name).as_bytes())
+    let text = match group {
+        Some((base, tip)) => chain_body_to_srdf(body, name, base, tip),
+        None => body_to_srdf(body, name),
+    };
+    crate::io::write_atomic(path, text.as_bytes())
 }
 
 #[cfg(test)]
