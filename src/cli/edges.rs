@@ -95,15 +95,16 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
     for l in lmax {
         let edges = oracle::sample_edges(&scene, &chain, &body, l, s.planner.lambda, count, seed);
         if edges.is_empty() {
-            return Err(kinsynth::Error::Parse {
-                file: file.clone(),
-                message: format!(
-                    "no collision-free start for the largest design in {} attempts (every \
-                     sampled configuration collides with an obstacle or with itself): no edge \
-                     to compare",
+            return Err(kinsynth::Error::invalid(
+                "robot",
+                "its largest design",
+                format!(
+                    "no collision-free start in {} attempts (every sampled configuration \
+                     collides with an obstacle or with itself): no edge to compare",
                     oracle::start_attempts(&body, count)
                 ),
-            });
+            )
+            .in_file(&file));
         }
         if edges.len() < count {
             say!(
