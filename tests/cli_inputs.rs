@@ -1007,3 +1007,44 @@ fn duplicate_key_is_named() {
         rejected(&check(&p), &["dup.toml", parts[0], parts[1]]);
     }
 }
+
+/// The optimisers' settings in a scenario are checked by the rules a checkpoint's are held to
+/// on resume, named under the scenario's sections.
+#[test]
+fn optimizer_settings_are_named_under_their_section() {
+    let dir = tempfile::tempdir().unwrap();
+    for (section, parts) in [
+        (
+            "[optimizer]\npopulation = 4\n[optimizer.ga]\nelites = 4\n",
+            [
+                "optimizer.ga.elites = 4",
+                "must be less than the population (4)",
+            ],
+        ),
+        (
+            "[optimizer.ga]\nzero_rate = 1.5\n",
+            [
+                "optimizer.ga.zero_rate = 1.5",
+                "must be a probability in [0, 1]",
+            ],
+        ),
+        (
+            "[optimizer.pso]\nmax_velocity = -1.0\n",
+            [
+                "optimizer.pso.max_velocity = -1",
+                "must be finite, not negative",
+            ],
+        ),
+        (
+            "[optimizer.asa]\ntemperature_ratio = 0.0\n",
+            ["optimizer.asa.temperature_ratio = 0", "must lie in (0, 1]"],
+        ),
+        (
+            "[optimizer.asa]\nbatch = 10001\n",
+            ["optimizer.asa.batch = 10001", "at most 10000"],
+        ),
+    ] {
+        let p = write(dir.path(), "o.toml", &format!("{ROBOT}{TASK}{section}"));
+        rejected(&check(&p), &["o.toml", parts[0], parts[1]]);
+    }
+}

@@ -17,10 +17,11 @@
 //! acceptance temperature restarts from the best cost's scale.
 
 use super::{
-    best_distinct, check_evaluated, check_len, check_points, check_setting, check_setting_count,
-    evaluate_batch, keep_best, random_point, Evaluated, Optimizer, StepContext, StepReport,
+    best_distinct, check_evaluated, check_len, check_points, evaluate_batch, keep_best,
+    random_point, Evaluated, Optimizer, StepContext, StepReport,
 };
 use crate::limits::{MAX_POPULATION, MAX_SETTING};
+use crate::scenario::{check, check_count, check_positive_within};
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -54,36 +55,27 @@ impl Default for AsaParams {
 }
 
 impl AsaParams {
-    /// Checks settings read back from a checkpoint by the rules a scenario's
-    /// `[optimizer.asa]` obeys; the error names the field.
-    pub fn check(&self) -> Result<(), String> {
-        check_setting_count("batch", self.batch as u64, 1, MAX_POPULATION as u64)?;
-        check_setting(
-            "initial_temperature",
-            self.initial_temperature,
-            0.0,
-            MAX_SETTING,
+    /// Checks the settings, with field names under `prefix`: a scenario's `[optimizer.asa]`
+    /// (`optimizer.asa.`) and a checkpoint's state read back (`params.`) obey the same rules.
+    pub fn check(&self, prefix: &str) -> crate::Result<()> {
+        let field = |name: &str| format!("{prefix}{name}");
+        check_count(self.batch, 1, MAX_POPULATION, field("batch"))?;
+        let t = self.initial_temperature;
+        check_positive_within(t, MAX_SETTING, "", field("initial_temperature"))?;
+        let r = self.temperature_ratio;
+        check(
+            r > 0.0 && r <= 1.0,
+            field("temperature_ratio"),
+            r,
+            "must lie in (0, 1]",
         )?;
-        if self.initial_temperature <= 0.0 {
-            return Err(format!(
-                "params.initial_temperature = {}: must be positive",
-                self.initial_temperature
-            ));
+        for (n, name) in [
+            (self.expected_evaluations, "expected_evaluations"),
+            (self.reanneal_interval, "reanneal_interval"),
+        ] {
+            check(n > 0, field(name), n, "must be at least 1")?;
         }
-        check_setting("temperature_ratio", self.temperature_ratio, 0.0, 1.0)?;
-        if self.temperature_ratio <= 0.0 {
-            return Err(format!(
-                "params.temperature_ratio = {}: must lie in (0, 1]",
-                self.temperature_ratio
-            ));
-        }
-        check_setting_count(
-            "expected_evaluations",
-            self.expected_evaluations,
-            1,
-            u64::MAX,
-        )?;
-        check_setting_count("reanneal_interval", self.reanneal_interval, 1, u64::MAX)
+        Ok(())
     }
 }
 
@@ -299,7 +291,7 @@ impl Optimizer for Asa {
     }
 
     fn validate(&self, dim: usize) -> Result<(), String> {
-        self.params.check()?;
+        self.params.check("params.").map_err(|e| e.to_string())?;
         check_points(&self.seeds, self.best.as_ref(), dim)?;
         if let Some(c) = &self.current {
             check_evaluated("current", c, dim)?;
@@ -321,7 +313,7 @@ mod tests {
     /// for memory, a ratio of 0 or a temperature of 0 would stall the schedule.
     #[test]
     fn restored_settings_are_checked() {
-        assert_eq!(AsaParams::default().check(), Ok(()));
+        assert!(AsaParams::default().check("params.").is_ok());
         let with = |change: fn(&mut AsaParams)| {
             let mut p = AsaParams::default();
             change(&mut p);
@@ -330,7 +322,7 @@ mod tests {
         for (p, says) in [
             (
                 with(|p| p.batch = 1 << 40),
-                "params.batch = 1099511627776: must lie in 1..=10000",
+                "params.batch = 1099511627776: must be at most 10000 (the limit)",
             ),
             (
                 with(|p| p.temperature_ratio = 0.0),
@@ -345,7 +337,7 @@ mod tests {
                 "params.reanneal_interval = 0",
             ),
         ] {
-            let e = p.check().unwrap_err();
+            let e = p.check("params.").unwrap_err().to_string();
             assert!(e.starts_with(says), "{e}");
         }
     }

@@ -3,10 +3,11 @@
 //! sets a variable to zero, and elitism.
 
 use super::{
-    best_distinct, check_evaluated, check_points, check_setting, check_setting_count,
-    evaluate_batch, keep_best, random_point, Evaluated, Optimizer, StepContext, StepReport,
+    best_distinct, check_evaluated, check_points, evaluate_batch, keep_best, random_point,
+    Evaluated, Optimizer, StepContext, StepReport,
 };
 use crate::limits::{MAX_POPULATION, MAX_SETTING};
+use crate::scenario::{check, check_count, check_non_negative_within};
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -52,25 +53,36 @@ impl Default for GaParams {
 }
 
 impl GaParams {
-    /// Checks settings read back from a checkpoint by the rules a scenario's
-    /// `[optimizer.ga]` and `optimizer.population` obey, so that no state can stall or
-    /// exhaust memory; the error names the field, e.g. `params.population = 0: …`.
-    pub fn check(&self) -> Result<(), String> {
-        let max = MAX_POPULATION as u64;
-        check_setting_count("population", self.population as u64, 2, max)?;
-        check_setting_count("elites", self.elites as u64, 0, self.population as u64 - 1)?;
-        check_setting_count("tournament", self.tournament as u64, 1, max)?;
-        check_setting("crossover_rate", self.crossover_rate, 0.0, 1.0)?;
-        for (field, rate) in [
+    /// Checks the settings, with field names under `prefix`: a scenario's `[optimizer.ga]`
+    /// (`optimizer.ga.`, with the population of `optimizer.population`) and a checkpoint's
+    /// state read back (`params.`) obey the same rules, so that no setting can stall or
+    /// exhaust memory.
+    pub fn check(&self, prefix: &str) -> crate::Result<()> {
+        let field = |name: &str| format!("{prefix}{name}");
+        check_count(self.population, 2, MAX_POPULATION, field("population"))?;
+        check(
+            self.elites < self.population,
+            field("elites"),
+            self.elites,
+            &format!(
+                "must be less than the population ({}): a generation needs children",
+                self.population
+            ),
+        )?;
+        check_count(self.tournament, 1, MAX_POPULATION, field("tournament"))?;
+        let rates = [
+            ("crossover_rate", Some(self.crossover_rate)),
             ("mutation_rate", self.mutation_rate),
             ("zero_rate", self.zero_rate),
-        ] {
+        ];
+        for (name, rate) in rates {
             if let Some(v) = rate {
-                check_setting(field, v, 0.0, 1.0)?;
+                let ok = (0.0..=1.0).contains(&v);
+                check(ok, field(name), v, "must be a probability in [0, 1]")?;
             }
         }
-        check_setting("eta_crossover", self.eta_crossover, 0.0, MAX_SETTING)?;
-        check_setting("eta_mutation", self.eta_mutation, 0.0, MAX_SETTING)
+        check_non_negative_within(self.eta_crossover, MAX_SETTING, "", field("eta_crossover"))?;
+        check_non_negative_within(self.eta_mutation, MAX_SETTING, "", field("eta_mutation"))
     }
 }
 
@@ -265,7 +277,7 @@ impl Optimizer for Ga {
     }
 
     fn validate(&self, dim: usize) -> Result<(), String> {
-        self.params.check()?;
+        self.params.check("params.").map_err(|e| e.to_string())?;
         check_points(&self.seeds, self.best.as_ref(), dim)?;
         for (i, e) in self.population.iter().enumerate() {
             check_evaluated(&format!("population[{i}]"), e, dim)?;

@@ -137,25 +137,6 @@ pub trait Optimizer: Send {
     fn validate(&self, dim: usize) -> Result<(), String>;
 }
 
-/// Checks a whole number of a restored state's settings (`params.<field>`): `lo ≤ n ≤ hi`.
-pub(crate) fn check_setting_count(field: &str, n: u64, lo: u64, hi: u64) -> Result<(), String> {
-    if (lo..=hi).contains(&n) {
-        Ok(())
-    } else {
-        Err(format!("params.{field} = {n}: must lie in {lo}..={hi}"))
-    }
-}
-
-/// Checks a real number of a restored state's settings (`params.<field>`): finite and within
-/// `[lo, hi]`.
-pub(crate) fn check_setting(field: &str, v: f64, lo: f64, hi: f64) -> Result<(), String> {
-    if v.is_finite() && (lo..=hi).contains(&v) {
-        Ok(())
-    } else {
-        Err(format!("params.{field} = {v}: must lie in [{lo}, {hi}]"))
-    }
-}
-
 /// Checks that `v` (the state field `field`) has `dim` finite values.
 pub(crate) fn check_len(field: &str, v: &[f64], dim: usize) -> Result<(), String> {
     if v.len() != dim {

@@ -9,10 +9,11 @@
 //! * `global`: the classic swarm, pulled toward its own best and the swarm's best.
 
 use super::{
-    best_distinct, check_evaluated, check_len, check_points, check_setting, check_setting_count,
-    evaluate_batch, keep_best, random_point, Evaluated, Optimizer, StepContext, StepReport,
+    best_distinct, check_evaluated, check_len, check_points, evaluate_batch, keep_best,
+    random_point, Evaluated, Optimizer, StepContext, StepReport,
 };
 use crate::limits::{MAX_POPULATION, MAX_SETTING};
+use crate::scenario::{check_count, check_non_negative_within};
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -68,18 +69,19 @@ impl Default for PsoParams {
 }
 
 impl PsoParams {
-    /// Checks settings read back from a checkpoint by the rules a scenario's
-    /// `[optimizer.pso]` and `optimizer.population` obey; the error names the field.
-    pub fn check(&self) -> Result<(), String> {
-        check_setting_count("swarm", self.swarm as u64, 2, MAX_POPULATION as u64)?;
-        for (field, v) in [
-            ("inertia", self.inertia),
-            ("inertia_end", self.inertia_end),
-            ("cognitive", self.cognitive),
-            ("social", self.social),
-            ("max_velocity", self.max_velocity),
+    /// Checks the settings, with field names under `prefix`: a scenario's `[optimizer.pso]`
+    /// (`optimizer.pso.`, with the swarm of `optimizer.population`) and a checkpoint's state
+    /// read back (`params.`) obey the same rules.
+    pub fn check(&self, prefix: &str) -> crate::Result<()> {
+        check_count(self.swarm, 2, MAX_POPULATION, format!("{prefix}swarm"))?;
+        for (v, name) in [
+            (self.inertia, "inertia"),
+            (self.inertia_end, "inertia_end"),
+            (self.cognitive, "cognitive"),
+            (self.social, "social"),
+            (self.max_velocity, "max_velocity"),
         ] {
-            check_setting(field, v, 0.0, MAX_SETTING)?;
+            check_non_negative_within(v, MAX_SETTING, "", format!("{prefix}{name}"))?;
         }
         Ok(())
     }
@@ -320,7 +322,7 @@ impl Optimizer for Pso {
     }
 
     fn validate(&self, dim: usize) -> Result<(), String> {
-        self.params.check()?;
+        self.params.check("params.").map_err(|e| e.to_string())?;
         check_points(&self.seeds, self.best.as_ref(), dim)?;
         let n = self.particles.len();
         for (i, p) in self.particles.iter().enumerate() {

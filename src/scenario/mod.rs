@@ -20,6 +20,7 @@ use crate::limits::{
     within, MAX_ANGLE, MAX_COLLIDERS_PER_LINK, MAX_LENGTH, MAX_LINKS, MAX_OBSTACLES,
     MAX_POPULATION, MAX_SETTING, MAX_TASKS,
 };
+use crate::optimize::{ga::GaParams, pso::PsoParams};
 use crate::world::{Contact, MeshCache, Obstacle, ObstacleShape, TaskOrientation, Workspace};
 use nalgebra::Point3;
 use std::path::{Path, PathBuf};
@@ -65,7 +66,7 @@ fn at(prefix: &str) -> impl Fn(Error) -> Error + '_ {
     }
 }
 
-fn check(
+pub(crate) fn check(
     ok: bool,
     field: impl Into<String>,
     value: impl std::fmt::Display,
@@ -99,7 +100,12 @@ fn check_non_negative(v: f64, field: impl Into<String>) -> Result<()> {
 }
 
 /// `v` must be positive, finite and at most `bound` (in `unit`).
-fn check_positive_within(v: f64, bound: f64, unit: &str, field: impl Into<String>) -> Result<()> {
+pub(crate) fn check_positive_within(
+    v: f64,
+    bound: f64,
+    unit: &str,
+    field: impl Into<String>,
+) -> Result<()> {
     check(
         v > 0.0 && within(v, bound),
         field,
@@ -109,7 +115,7 @@ fn check_positive_within(v: f64, bound: f64, unit: &str, field: impl Into<String
 }
 
 /// `v` must be finite, not negative and at most `bound` (in `unit`).
-fn check_non_negative_within(
+pub(crate) fn check_non_negative_within(
     v: f64,
     bound: f64,
     unit: &str,
@@ -135,7 +141,12 @@ fn check_vector(v: &[f64], bound: f64, unit: &str, field: impl Into<String>) -> 
 }
 
 /// A count must lie in `min..=max` (`max` is a limit of [`crate::limits`]).
-fn check_count(n: usize, min: usize, max: usize, field: impl Into<String>) -> Result<()> {
+pub(crate) fn check_count(
+    n: usize,
+    min: usize,
+    max: usize,
+    field: impl Into<String>,
+) -> Result<()> {
     if n < min {
         Err(Error::invalid(field, n, format!("must be at least {min}")))
     } else if n > max {
@@ -383,80 +394,18 @@ impl Scenario {
             o.population,
             "optimizer.migration.count",
         )?;
-        let ga = &o.ga;
-        check(
-            ga.elites < o.population,
-            "optimizer.ga.elites",
-            ga.elites,
-            &format!(
-                "must be less than the population ({}): a generation needs children",
-                o.population
-            ),
-        )?;
-        check_count(ga.tournament, 1, MAX_POPULATION, "optimizer.ga.tournament")?;
-        let rate = |v: f64, field: &str| {
-            check(
-                (0.0..=1.0).contains(&v),
-                field,
-                v,
-                "must be a probability in [0, 1]",
-            )
-        };
-        rate(ga.crossover_rate, "optimizer.ga.crossover_rate")?;
-        if let Some(v) = ga.mutation_rate {
-            rate(v, "optimizer.ga.mutation_rate")?;
+        // The algorithms' settings, by the rules a checkpoint's are held to on resume.
+        GaParams {
+            population: o.population,
+            ..o.ga.clone()
         }
-        if let Some(v) = ga.zero_rate {
-            rate(v, "optimizer.ga.zero_rate")?;
+        .check("optimizer.ga.")?;
+        PsoParams {
+            swarm: o.population,
+            ..o.pso.clone()
         }
-        check_non_negative_within(
-            ga.eta_crossover,
-            MAX_SETTING,
-            "",
-            "optimizer.ga.eta_crossover",
-        )?;
-        check_non_negative_within(
-            ga.eta_mutation,
-            MAX_SETTING,
-            "",
-            "optimizer.ga.eta_mutation",
-        )?;
-        let pso = &o.pso;
-        for (v, name) in [
-            (pso.inertia, "inertia"),
-            (pso.inertia_end, "inertia_end"),
-            (pso.cognitive, "cognitive"),
-            (pso.social, "social"),
-            (pso.max_velocity, "max_velocity"),
-        ] {
-            check_non_negative_within(v, MAX_SETTING, "", format!("optimizer.pso.{name}"))?;
-        }
-        let asa = &o.asa;
-        check_count(asa.batch, 1, MAX_POPULATION, "optimizer.asa.batch")?;
-        check_positive_within(
-            asa.initial_temperature,
-            MAX_SETTING,
-            "",
-            "optimizer.asa.initial_temperature",
-        )?;
-        check(
-            asa.temperature_ratio > 0.0 && asa.temperature_ratio <= 1.0,
-            "optimizer.asa.temperature_ratio",
-            asa.temperature_ratio,
-            "must lie in (0, 1]",
-        )?;
-        check(
-            asa.expected_evaluations > 0,
-            "optimizer.asa.expected_evaluations",
-            asa.expected_evaluations,
-            "must be at least 1",
-        )?;
-        check(
-            asa.reanneal_interval > 0,
-            "optimizer.asa.reanneal_interval",
-            asa.reanneal_interval,
-            "must be at least 1",
-        )
+        .check("optimizer.pso.")?;
+        o.asa.check("optimizer.asa.")
     }
 
     fn design_space(spec: &ScenarioSpec) -> Result<DesignSpace> {
