@@ -1043,6 +1043,10 @@ fn optimizer_settings_are_named_under_their_section() {
             "[optimizer.asa]\nbatch = 10001\n",
             ["optimizer.asa.batch = 10001", "at most 10000"],
         ),
+        (
+            "[optimizer]\npopulation = 4\nmigration = { interval = 10, count = 5 }\n",
+            ["optimizer.migration.count = 5", "must be at most 4"],
+        ),
     ] {
         let p = write(dir.path(), "o.toml", &format!("{ROBOT}{TASK}{section}"));
         rejected(&check(&p), &["o.toml", parts[0], parts[1]]);

@@ -407,11 +407,11 @@ fn a_stopped_job_resumes_to_the_uninterrupted_result_and_refuses_another_number_
     for (bad, says) in [
         (
             with_migration(2, 1_000_000_000),
-            "islands.migration.count = 1000000000: must lie in 0..=10000",
+            "islands.migration.count = 1000000000: must be at most 10000 (the limit)",
         ),
         (
             with_migration(0, 1),
-            "islands.migration.interval = 0: must lie in 1..=100000",
+            "islands.migration.interval = 0: must be at least 1",
         ),
         (small_swarm, "state[1].params.swarm = 1"),
     ] {

@@ -40,6 +40,19 @@ pub struct Migration {
     pub count: usize,
 }
 
+impl Migration {
+    /// Checks the settings, with field names under `prefix` (`optimizer.migration.` in a
+    /// scenario, `islands.migration.` in a checkpoint): an interval from 1 to
+    /// [`crate::limits::MAX_ITERATIONS`] generations and at most `max_count` designs (the
+    /// population), so that a migration can neither stall nor exhaust memory.
+    pub fn check(&self, prefix: &str, max_count: usize) -> Result<()> {
+        let max_interval = crate::limits::MAX_ITERATIONS;
+        let interval = format!("{prefix}interval");
+        crate::scenario::check_count(self.interval, 1, max_interval, interval)?;
+        crate::scenario::check_count(self.count, 0, max_count, format!("{prefix}count"))
+    }
+}
+
 impl Default for Migration {
     fn default() -> Self {
         Migration {
@@ -717,22 +730,8 @@ fn check_resume(c: &Checkpoint, n: usize) -> Result<()> {
     }
     // The migration settings by a scenario's rules (a count of 10^9 asked for memory at the
     // first migration).
-    let Migration { interval, count } = i.migration;
-    let max_interval = crate::limits::MAX_ITERATIONS;
-    if !(1..=max_interval).contains(&interval) {
-        return Err(Error::invalid(
-            "islands.migration.interval",
-            interval,
-            format!("must lie in 1..={max_interval}"),
-        ));
-    }
-    if count > crate::limits::MAX_POPULATION {
-        return Err(Error::invalid(
-            "islands.migration.count",
-            count,
-            format!("must lie in 0..={}", crate::limits::MAX_POPULATION),
-        ));
-    }
+    i.migration
+        .check("islands.migration.", crate::limits::MAX_POPULATION)?;
     let states = c.state.as_array().map_or(0, Vec::len);
     if states != n || i.evaluations.len() != n {
         return Err(Error::invalid(

@@ -382,19 +382,9 @@ impl Scenario {
             check(n > 0, "optimizer.evaluations", n, "must be at least 1")?;
         }
         check_non_negative(o.checkpoint_interval, "optimizer.checkpoint_interval")?;
-        check_count(
-            o.migration.interval,
-            1,
-            crate::limits::MAX_ITERATIONS,
-            "optimizer.migration.interval",
-        )?;
-        check_count(
-            o.migration.count,
-            0,
-            o.population,
-            "optimizer.migration.count",
-        )?;
-        // The algorithms' settings, by the rules a checkpoint's are held to on resume.
+        // The algorithms' and the migration's settings, by the rules a checkpoint's are held
+        // to on resume.
+        o.migration.check("optimizer.migration.", o.population)?;
         GaParams {
             population: o.population,
             ..o.ga.clone()
