@@ -158,7 +158,7 @@ fn two_shards_merge_into_the_unsharded_tables() {
             .to_string();
         assert!(
             e.contains(&manifest.display().to_string())
-                && e.contains(&format!("shard = {shown}: must be K/N")),
+                && e.contains(&format!("shard = {shown}: N must lie in 1..=100000")),
             "{e}"
         );
     }

@@ -133,6 +133,18 @@ impl Shard {
     /// The whole experiment: slice 1 of 1.
     pub const WHOLE: Shard = Shard { index: 1, count: 1 };
 
+    /// What is wrong with the slice, if anything: `N` must lie in `1..=`[`MAX_SHARDS`] and `K`
+    /// in `1..=N` (checked before [`Shard::workspaces`] divides by `N`).
+    pub fn problem(&self) -> Option<String> {
+        if self.count == 0 || self.count > MAX_SHARDS {
+            Some(format!("N must lie in 1..={MAX_SHARDS}"))
+        } else if !(1..=self.count).contains(&self.index) {
+            Some("K must lie in 1..=N".into())
+        } else {
+            None
+        }
+    }
+
     /// The workspaces of this slice out of `runs`: a contiguous range, the slices of one
     /// experiment covering `0 … runs−1` exactly once (some may be empty when `count > runs`).
     pub fn workspaces(&self, runs: usize) -> std::ops::Range<usize> {
@@ -154,13 +166,11 @@ impl std::str::FromStr for Shard {
         let (Some(index), Some(count)) = (parse(k), parse(n)) else {
             return Err(bad("must be K/N with whole numbers K and N, e.g. 2/4"));
         };
-        if count == 0 || count > MAX_SHARDS {
-            return Err(bad(&format!("N must lie in 1..={MAX_SHARDS}")));
+        let shard = Shard { index, count };
+        match shard.problem() {
+            Some(why) => Err(bad(&why)),
+            None => Ok(shard),
         }
-        if !(1..=count).contains(&index) {
-            return Err(bad("K must lie in 1..=N"));
-        }
-        Ok(Shard { index, count })
     }
 }
 
@@ -346,14 +356,8 @@ pub fn read_manifest(dir: &Path) -> Result<Manifest> {
     })?;
     m.spec.validate().map_err(|e| e.in_file(&path))?;
     // The slice as `--shard` accepts it, before its workspaces are computed from it.
-    let Shard { index, count } = m.shard;
-    if count == 0 || count > MAX_SHARDS || !(1..=count).contains(&index) {
-        return Err(crate::Error::invalid(
-            "shard",
-            m.shard,
-            format!("must be K/N with 1 ≤ K ≤ N ≤ {MAX_SHARDS}"),
-        )
-        .in_file(&path));
+    if let Some(why) = m.shard.problem() {
+        return Err(crate::Error::invalid("shard", m.shard, why).in_file(&path));
     }
     let expected: Vec<usize> = m.shard.workspaces(m.spec.runs).collect();
     if m.workspaces != expected {
