@@ -265,7 +265,14 @@ impl Comm for ThreadComm {
 }
 
 /// Runs an island job of `n` islands over `ranks` thread-ranks.
-fn islands_on_ranks(scenario: &Path, out: &Path, n: usize, ranks: usize, o: RunOptions) {
+/// Runs an island job of `n` islands over `ranks` simulated ranks; rank 0's summary.
+fn islands_on_ranks(
+    scenario: &Path,
+    out: &Path,
+    n: usize,
+    ranks: usize,
+    o: RunOptions,
+) -> RunSummary {
     let s = Scenario::load(scenario).unwrap();
     let migration = Migration {
         interval: 2,
@@ -282,13 +289,49 @@ fn islands_on_ranks(scenario: &Path, out: &Path, n: usize, ranks: usize, o: RunO
                         .run(&comm, None, &AtomicBool::new(false), &mut Quiet)
                         .unwrap();
                     assert_eq!(got.is_some(), comm.rank == 0);
+                    got.map(|g| g.summary)
                 })
             })
             .collect();
-        for h in handles {
-            h.join().unwrap();
-        }
-    });
+        let mut summaries: Vec<RunSummary> = handles
+            .into_iter()
+            .filter_map(|h| h.join().unwrap())
+            .collect();
+        summaries.pop().expect("rank 0's summary")
+    })
+}
+
+/// A time limit cuts an island generation short on every rank together: 4 islands of 200
+/// designs over 2 ranks (about 1.5 s per generation here) under a 0.3 s limit stop within the
+/// first generation, with the best design evaluated by then; the checkpoint stays at the last
+/// whole generation (none).
+#[test]
+fn a_time_limit_cuts_an_island_generation_short_on_every_rank() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(small_scenario(dir.path()))
+        .unwrap()
+        .replace("population = 8", "population = 200");
+    let scenario = dir.path().join("wide.toml");
+    std::fs::write(&scenario, text).unwrap();
+    let out = dir.path().join("cut");
+    let o = RunOptions {
+        time_limit: Some(0.3),
+        evaluations: None,
+        ..options(Algorithm::Ga, 0)
+    };
+    let summary = islands_on_ranks(&scenario, &out, 4, 2, o);
+    assert_eq!(summary.stopped, "time limit reached");
+    assert!(
+        (1..800).contains(&summary.evaluations),
+        "the first generation is cut short: {} of 800 evaluated",
+        summary.evaluations
+    );
+    assert!(summary.cost.is_finite());
+    let checkpoint: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("checkpoint.json")).unwrap())
+            .unwrap();
+    assert_eq!(checkpoint["generation"], 0);
+    assert_eq!(checkpoint["evaluations"], 0);
 }
 
 #[test]

@@ -21,6 +21,7 @@ fn drive(opt: &mut dyn Optimizer, problem: &dyn Problem, budget: u64, seed: u64)
             first_stream: evaluations,
             stride: 1,
             progress: evaluations as f64 / budget as f64,
+            deadline: None,
         });
         evaluations += r.evaluations;
         generation += 1;
@@ -138,4 +139,65 @@ fn design_optimisation_is_the_same_on_one_thread_and_on_two() {
     let (one, two) = (run(1), run(2));
     assert_eq!(one, two);
     assert!(one.cost.is_finite());
+}
+
+/// A step whose deadline has passed evaluates its first point only and reports the step cut,
+/// with that point; the snapshot taken before it is the state to go on from. Each optimiser,
+/// at its first step and at a later one (ASA's later steps include its re-annealing probes).
+#[test]
+fn a_step_past_its_deadline_is_cut_with_the_points_it_evaluated() {
+    let problem = Sphere::new(4);
+    type Make = fn() -> Box<dyn Optimizer>;
+    let makers: [(&str, Make); 3] = [
+        ("ga", ga),
+        ("pso", pso),
+        ("asa", || {
+            Box::new(Asa::new(
+                AsaParams {
+                    reanneal_interval: 1,
+                    ..AsaParams::default()
+                },
+                vec![],
+            ))
+        }),
+    ];
+    for (name, make) in makers {
+        let mut opt = make();
+        for generation in 0..3u64 {
+            let before = opt.snapshot();
+            let saved = before.save();
+            let mut rng = ChaCha8Rng::seed_from_u64(9);
+            rng.set_stream(generation);
+            let r = opt.step(StepContext {
+                problem: &problem,
+                rng: &mut rng,
+                first_stream: 100 * generation,
+                stride: 1,
+                progress: 0.0,
+                deadline: Some(std::time::Instant::now()),
+            });
+            let cut = r
+                .cut
+                .unwrap_or_else(|| panic!("{name}: step {generation} not cut"));
+            assert!(!cut.evaluated.is_empty(), "{name}");
+            assert_eq!(r.evaluations, cut.evaluated.len() as u64, "{name}");
+            assert!(cut.evaluated.iter().all(|e| e.cost.is_finite()), "{name}");
+            // Restored, the state is the one before the step; a whole step then goes on.
+            opt = before;
+            assert_eq!(opt.save(), saved, "{name}");
+            let mut rng = ChaCha8Rng::seed_from_u64(9);
+            rng.set_stream(generation);
+            let r = opt.step(StepContext {
+                problem: &problem,
+                rng: &mut rng,
+                first_stream: 100 * generation,
+                stride: 1,
+                progress: 0.0,
+                deadline: None,
+            });
+            assert!(r.cut.is_none(), "{name}");
+            // The cut step's first point is the whole step's first point.
+            assert!(r.evaluations >= cut.evaluated.len() as u64, "{name}");
+        }
+    }
 }

@@ -442,6 +442,65 @@ fn resume_with_a_larger_budget_extends_the_run_to_the_uninterrupted_result() {
     );
 }
 
+/// A time limit cuts a generation short instead of waiting for it: with 600 designs per
+/// generation (about 2 s of evaluations here) and `--time-limit 0.3`, the run stops within the
+/// first generation and its result is the best design evaluated by then. The checkpoint stays
+/// at the last whole generation (here none), so a resume repeats the cut generation with the
+/// same random streams and reaches the result of an uninterrupted run.
+#[test]
+fn a_time_limit_cuts_a_generation_short_and_resume_repeats_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let scenario = scenario_copy(dir.path());
+    let text = std::fs::read_to_string(&scenario).unwrap();
+    std::fs::write(
+        &scenario,
+        text.replace("population = 32", "population = 600"),
+    )
+    .unwrap();
+    let recheck = ["--recheck-seeds", "2"];
+    let cut = dir.path().join("cut");
+    ok(&optimize(
+        &scenario,
+        &cut,
+        &[&recheck[..], &["--time-limit", "0.3"]].concat(),
+    )
+    .output()
+    .unwrap());
+    let best = json(&cut.join("best.json"));
+    assert_eq!(best["stopped"], "time limit reached");
+    let evaluated = best["evaluations"].as_u64().unwrap();
+    assert!(
+        (1..600).contains(&evaluated),
+        "the first generation is cut short: {evaluated} of 600 evaluated"
+    );
+    assert!(best["cost"].as_f64().unwrap().is_finite());
+    let checkpoint = json(&cut.join("checkpoint.json"));
+    assert_eq!(checkpoint["generation"], 0);
+    assert_eq!(checkpoint["evaluations"], 0);
+    let whole = dir.path().join("whole");
+    ok(&optimize(
+        &scenario,
+        &whole,
+        &[&recheck[..], &["--evaluations", "600"]].concat(),
+    )
+    .output()
+    .unwrap());
+    // The time limit is a total over the run: spent, it stops a resume before anything is
+    // evaluated, and says so.
+    one_line_error(
+        &resume(&cut, &["--evaluations", "600"]),
+        &[
+            "time_limit = 0.3",
+            "was spent before any design was evaluated",
+        ],
+    );
+    ok(&resume(
+        &cut,
+        &["--evaluations", "600", "--time-limit", "1000"],
+    ));
+    assert_eq!(best_without_time(&cut), best_without_time(&whole));
+}
+
 #[test]
 fn every_help_lists_the_files_its_command_writes() {
     let help = |cmd: &str| {

@@ -18,7 +18,7 @@
 
 use super::{
     best_distinct, check_evaluated, check_len, check_points, evaluate_batch, keep_best,
-    random_point, Evaluated, Optimizer, StepContext, StepReport,
+    random_point, Cut, Evaluated, Optimizer, StepContext, StepReport,
 };
 use crate::limits::{MAX_POPULATION, MAX_SETTING};
 use crate::scenario::{check, check_count, check_positive_within};
@@ -171,7 +171,17 @@ impl Optimizer for Asa {
                 xs.push(random_point(lower, upper, rng));
             }
             let n = xs.len() as u64;
-            let ev = evaluate_batch(ctx.problem, xs, ctx.first_stream, ctx.stride, ctx.progress);
+            let ev = match evaluate_batch(
+                ctx.problem,
+                xs,
+                ctx.first_stream,
+                ctx.stride,
+                ctx.progress,
+                ctx.deadline,
+            ) {
+                Ok(v) => v,
+                Err(cut) => return StepReport::cut(cut),
+            };
             let mean = ev.iter().map(|e| e.cost).sum::<f64>() / ev.len() as f64;
             let var = ev.iter().map(|e| (e.cost - mean).powi(2)).sum::<f64>() / ev.len() as f64;
             self.t0_accept = var.sqrt().max(1e-9);
@@ -181,14 +191,26 @@ impl Optimizer for Asa {
                 keep_best(&mut self.best, e);
             }
             self.current = Some(ev[0].clone());
-            return StepReport { evaluations: n };
+            return StepReport::done(n);
         };
         let xs: Vec<Vec<f64>> = (0..self.params.batch.max(1))
             .map(|_| self.generate(&current.x, lower, upper, rng))
             .collect();
         let mut evaluations = xs.len() as u64;
-        let ev = evaluate_batch(ctx.problem, xs, ctx.first_stream, ctx.stride, ctx.progress);
+        let ev = match evaluate_batch(
+            ctx.problem,
+            xs,
+            ctx.first_stream,
+            ctx.stride,
+            ctx.progress,
+            ctx.deadline,
+        ) {
+            Ok(v) => v,
+            Err(cut) => return StepReport::cut(cut),
+        };
         let mut cur = current;
+        // Kept for the result should the probes below be cut short.
+        let taken = ev.clone();
         for e in ev {
             keep_best(&mut self.best, &e);
             let t_accept = self
@@ -229,7 +251,21 @@ impl Optimizer for Asa {
                 .first_stream
                 .wrapping_add(evaluations.wrapping_mul(ctx.stride));
             evaluations += probes.len() as u64;
-            let ev = evaluate_batch(ctx.problem, probes, stream, ctx.stride, ctx.progress);
+            let ev = match evaluate_batch(
+                ctx.problem,
+                probes,
+                stream,
+                ctx.stride,
+                ctx.progress,
+                ctx.deadline,
+            ) {
+                Ok(v) => v,
+                Err(cut) => {
+                    let mut evaluated = taken;
+                    evaluated.extend(cut.evaluated);
+                    return StepReport::cut(Cut { evaluated });
+                }
+            };
             let s: Vec<f64> = ev
                 .iter()
                 .enumerate()
@@ -261,11 +297,15 @@ impl Optimizer for Asa {
                 .max(0.0)
                 .powf(d as f64);
         }
-        StepReport { evaluations }
+        StepReport::done(evaluations)
     }
 
     fn best(&self) -> Option<&Evaluated> {
         self.best.as_ref()
+    }
+
+    fn snapshot(&self) -> Box<dyn Optimizer> {
+        Box::new(self.clone())
     }
 
     fn save(&self) -> serde_json::Value {

@@ -227,7 +227,17 @@ impl Optimizer for Ga {
             children
         };
         let evaluations = xs.len() as u64;
-        let evaluated = evaluate_batch(ctx.problem, xs, ctx.first_stream, ctx.stride, ctx.progress);
+        let evaluated = match evaluate_batch(
+            ctx.problem,
+            xs,
+            ctx.first_stream,
+            ctx.stride,
+            ctx.progress,
+            ctx.deadline,
+        ) {
+            Ok(v) => v,
+            Err(cut) => return StepReport::cut(cut),
+        };
         for e in &evaluated {
             keep_best(&mut self.best, e);
         }
@@ -239,11 +249,15 @@ impl Optimizer for Ga {
             self.population.truncate(self.params.elites.min(n));
             self.population.extend(evaluated);
         }
-        StepReport { evaluations }
+        StepReport::done(evaluations)
     }
 
     fn best(&self) -> Option<&Evaluated> {
         self.best.as_ref()
+    }
+
+    fn snapshot(&self) -> Box<dyn Optimizer> {
+        Box::new(self.clone())
     }
 
     fn save(&self) -> serde_json::Value {

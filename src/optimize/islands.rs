@@ -20,7 +20,7 @@ pub mod mpi;
 pub use super::output::{IslandRow, IslandsInfo};
 use super::runner::{
     files, history_row, step_rng, Checkpoint, Conclusion, Counters, HistoryRow, Observer,
-    RunOptions, RunSummary, Runner,
+    RunOptions, RunSummary, Runner, TIME_LIMIT_REACHED,
 };
 use super::{Evaluated, Optimizer, StepContext};
 use crate::error::{Error, Result};
@@ -358,6 +358,9 @@ impl<'r, 'a> IslandJob<'r, 'a> {
         let mut timings = IslandTimings::default();
         let mut last_checkpoint = Instant::now();
         let first_generation = generation;
+        let deadline = runner.deadline(start, elapsed_before);
+        // The points of a generation cut short at the time limit (gathered at rank 0).
+        let (mut late, mut late_count): (Vec<Evaluated>, u64) = (Vec::new(), 0);
         // Rank 0's view of every island: evaluations and best.
         let mut statuses = self.gather_status(comm, &local, &mut timings)?;
         let mut best_cost = global_best(statuses.as_deref()).map_or(f64::INFINITY, |b| b.1.cost);
@@ -400,16 +403,44 @@ impl<'r, 'a> IslandJob<'r, 'a> {
             if let Some(why) = decision.stop {
                 break why;
             }
+            let mut before = Vec::new();
+            let (mut cut, mut was_cut) = (Vec::new(), false);
             for island in &mut local {
                 let i = island.index as u64;
+                if deadline.is_some() {
+                    before.push(island.optimizer.snapshot());
+                }
                 let report = island.optimizer.step(StepContext {
                     problem: objective,
                     rng: &mut step_rng(o.seed, generation.wrapping_mul(stride).wrapping_add(i)),
                     first_stream: island.evaluations.wrapping_mul(stride).wrapping_add(i),
                     stride,
                     progress: decision.progress,
+                    deadline,
                 });
-                island.evaluations = island.evaluations.saturating_add(report.evaluations);
+                match report.cut {
+                    Some(c) => {
+                        was_cut = true;
+                        cut.extend(c.evaluated);
+                    }
+                    None => {
+                        island.evaluations = island.evaluations.saturating_add(report.evaluations)
+                    }
+                }
+            }
+            if deadline.is_some() {
+                // A generation cut short on any rank is undone on every rank: each island
+                // returns to its last whole generation, the points evaluated go to the result.
+                if let Some(points) = self.gather_cut(comm, was_cut, &cut, &mut timings)? {
+                    for (island, was) in local.iter_mut().zip(before) {
+                        island.optimizer = was;
+                    }
+                    // The points gathered at rank 0: every island's whole-generation counts
+                    // stand, so the cut ones are added to the job's total for the result only.
+                    late_count = points.len() as u64;
+                    late = points;
+                    break TIME_LIMIT_REACHED.to_string();
+                }
             }
             generation = generation.saturating_add(1);
             timings.generations += 1;
@@ -473,17 +504,27 @@ impl<'r, 'a> IslandJob<'r, 'a> {
             .enumerate()
             .map(|(i, s)| runner.load_optimizer(s).map_err(|e| prefix_state(e, i)))
             .collect::<Result<_>>()?;
-        let (best_island, best) = global_best(Some(&all))
-            .map(|(i, b)| (i, b.clone()))
-            .ok_or_else(|| Error::invalid("budget", 0, "the job stopped before any evaluation"))?;
-        let candidates: Vec<&Evaluated> = optimizers.iter().flat_map(|o| o.candidates()).collect();
+        let (best_island, mut best) = match global_best(Some(&all)) {
+            Some((i, b)) => (i, Some(b.clone())),
+            None => (0, None),
+        };
+        for e in &late {
+            super::keep_best(&mut best, e);
+        }
+        let best = best.ok_or_else(|| runner.nothing_evaluated(&stopped))?;
+        let mut candidates: Vec<&Evaluated> =
+            optimizers.iter().flat_map(|o| o.candidates()).collect();
+        candidates.extend(&late);
         let summary = runner.conclude(
             objective,
             Conclusion {
                 optimizer: optimizers[0].name(),
                 candidates,
                 best,
-                counters,
+                counters: Counters {
+                    evaluations: counters.evaluations.saturating_add(late_count),
+                    ..counters
+                },
                 elapsed: &elapsed,
                 stopped,
                 history: &history,
@@ -612,6 +653,32 @@ impl<'r, 'a> IslandJob<'r, 'a> {
         timings.migrations += 1;
         timings.migration_s += t.elapsed().as_secs_f64();
         Ok(())
+    }
+
+    /// Whether any rank's islands were cut short at the deadline in this generation (`flag`:
+    /// this rank's were; every rank learns the answer): `Some` with every rank's cut points
+    /// (`mine` here; all of them at rank 0, none elsewhere) when one was, else `None`.
+    fn gather_cut(
+        &self,
+        comm: &dyn Comm,
+        flag: bool,
+        mine: &[Evaluated],
+        timings: &mut IslandTimings,
+    ) -> Result<Option<Vec<Evaluated>>> {
+        let t = Instant::now();
+        let gathered = comm.gather(&encode(&(flag, mine)))?;
+        let mut points = Vec::new();
+        let mut any = false;
+        if let Some(parts) = gathered {
+            for p in &parts {
+                let (f, got): (bool, Vec<Evaluated>) = decode(comm, "cut", p)?;
+                any |= f;
+                points.extend(got);
+            }
+        }
+        let any: bool = decode(comm, "cut decision", &comm.broadcast(&encode(&any))?)?;
+        timings.sync_s += t.elapsed().as_secs_f64();
+        Ok(any.then_some(points))
     }
 
     /// Every island's status at rank 0, by island index.

@@ -19,6 +19,7 @@ pub use runner::RunOptions;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use std::time::Instant;
 
 /// A box-bounded minimisation problem whose evaluations may be random (a planner inside) but
 /// are reproducible: `stream` names the evaluation's random stream.
@@ -61,34 +62,81 @@ impl Evaluated {
 /// Evaluates a batch of points in parallel (rayon). Point `i` uses the random stream
 /// `first_stream + i·stride`, so the results do not depend on the number of threads (`stride`
 /// is 1 for one population; island `i` of `N` uses the streams `≡ i (mod N)`).
+///
+/// With a `deadline`, a point whose evaluation has not begun when it passes is skipped (the
+/// first point is always evaluated, so that every step evaluates something): the batch is then
+/// [`Cut`], with the points that were evaluated, and the step that asked for it leaves its
+/// result to the caller (see [`Optimizer::step`]).
 pub fn evaluate_batch(
     problem: &dyn Problem,
     xs: Vec<Vec<f64>>,
     first_stream: u64,
     stride: u64,
     progress: f64,
-) -> Vec<Evaluated> {
-    xs.into_par_iter()
+    deadline: Option<Instant>,
+) -> Result<Vec<Evaluated>, Cut> {
+    let n = xs.len();
+    let done: Vec<Evaluated> = xs
+        .into_par_iter()
         .enumerate()
-        .map(|(i, x)| {
+        .filter_map(|(i, x)| {
+            if i > 0 && deadline.is_some_and(|d| Instant::now() >= d) {
+                return None;
+            }
             let stream = first_stream.wrapping_add((i as u64).wrapping_mul(stride));
             let (cost, reachability) = problem.evaluate(&x, stream, progress);
-            Evaluated {
+            Some(Evaluated {
                 x,
                 cost,
                 reachability,
                 stream,
                 progress,
-            }
+            })
         })
-        .collect()
+        .collect();
+    if done.len() == n {
+        Ok(done)
+    } else {
+        Err(Cut { evaluated: done })
+    }
+}
+
+/// A batch of evaluations cut short by the deadline of its step: the points that were
+/// evaluated (in stream order), which the step did not take in.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Cut {
+    /// The points evaluated before the deadline.
+    pub evaluated: Vec<Evaluated>,
 }
 
 /// What one optimiser step did.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct StepReport {
-    /// Objective evaluations made in the step.
+    /// Objective evaluations made in the step (a cut step: those evaluated before the
+    /// deadline).
     pub evaluations: u64,
+    /// `Some` when the step's deadline cut a batch short: the step is incomplete, the
+    /// optimiser's state must be restored from a [`Optimizer::snapshot`] taken before it, and
+    /// the points evaluated are offered to the run's result only.
+    pub cut: Option<Cut>,
+}
+
+impl StepReport {
+    /// A complete step of `evaluations` evaluations.
+    pub fn done(evaluations: u64) -> Self {
+        StepReport {
+            evaluations,
+            cut: None,
+        }
+    }
+
+    /// A step cut short at its deadline.
+    pub fn cut(cut: Cut) -> Self {
+        StepReport {
+            evaluations: cut.evaluated.len() as u64,
+            cut: Some(cut),
+        }
+    }
 }
 
 /// Everything a step needs from its caller: the problem, a random stream for this step only,
@@ -106,6 +154,9 @@ pub struct StepContext<'a> {
     pub stride: u64,
     /// Progress ∈ [0, 1].
     pub progress: f64,
+    /// When the run's time is up: evaluations not begun by then are skipped and the step is
+    /// cut ([`evaluate_batch`]). `None`: no time limit.
+    pub deadline: Option<Instant>,
 }
 
 /// An optimiser: it proposes points, has them evaluated (in parallel) and updates its state.
@@ -113,8 +164,12 @@ pub struct StepContext<'a> {
 pub trait Optimizer: Send {
     /// The algorithm's name (`ga`, `pso`, `asa`).
     fn name(&self) -> &'static str;
-    /// One generation / iteration.
+    /// One generation / iteration. When its [`StepContext::deadline`] cuts a batch short, it
+    /// returns at once with [`StepReport::cut`]; its state may then be half-updated, and the
+    /// caller restores the [`Optimizer::snapshot`] it took before the step.
     fn step(&mut self, ctx: StepContext<'_>) -> StepReport;
+    /// A copy of the whole state, to restore after a step cut short.
+    fn snapshot(&self) -> Box<dyn Optimizer>;
     /// The best point so far (`None` before the first step).
     fn best(&self) -> Option<&Evaluated>;
     /// The state as JSON, for checkpoints.

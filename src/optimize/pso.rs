@@ -245,7 +245,17 @@ impl Optimizer for Pso {
             self.particles.iter().map(|p| p.x.clone()).collect()
         };
         let evaluations = xs.len() as u64;
-        let evaluated = evaluate_batch(ctx.problem, xs, ctx.first_stream, ctx.stride, ctx.progress);
+        let evaluated = match evaluate_batch(
+            ctx.problem,
+            xs,
+            ctx.first_stream,
+            ctx.stride,
+            ctx.progress,
+            ctx.deadline,
+        ) {
+            Ok(v) => v,
+            Err(cut) => return StepReport::cut(cut),
+        };
         if self.particles.is_empty() {
             for e in evaluated {
                 let v = vmax
@@ -278,11 +288,15 @@ impl Optimizer for Pso {
                 }
             }
         }
-        StepReport { evaluations }
+        StepReport::done(evaluations)
     }
 
     fn best(&self) -> Option<&Evaluated> {
         self.best.as_ref()
+    }
+
+    fn snapshot(&self) -> Box<dyn Optimizer> {
+        Box::new(self.clone())
     }
 
     fn save(&self) -> serde_json::Value {

@@ -16,7 +16,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 /// How a run is set up (from the scenario's `[optimizer]` section and the command line).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -482,6 +482,9 @@ pub(crate) struct Conclusion<'a> {
     pub islands: Option<super::islands::IslandsInfo>,
 }
 
+/// Why a run stopped when its time limit was reached (between generations or within one).
+pub(crate) const TIME_LIMIT_REACHED: &str = "time limit reached";
+
 /// The random numbers of an optimiser step: the run's seed on stream
 /// `OPTIMIZER_STREAM + stream` (the generation, for one population).
 pub(crate) fn step_rng(seed: u64, stream: u64) -> ChaCha8Rng {
@@ -633,19 +636,31 @@ impl<'a> Runner<'a> {
         let elapsed = || elapsed_before + start.elapsed().as_secs_f64();
         let mut last_checkpoint = Instant::now();
         let mut best_cost = optimizer.best().map_or(f64::INFINITY, |b| b.cost);
+        let deadline = self.deadline(start, elapsed_before);
+        // The points of a generation cut short at the time limit: offered to the result only.
+        let mut late: Vec<Evaluated> = Vec::new();
         let stopped = loop {
             if let Some(why) =
                 self.stop_reason(stop, evaluations, elapsed(), optimizer.best(), stale)
             {
                 break why;
             }
+            let before = deadline.map(|_| optimizer.snapshot());
             let report = optimizer.step(StepContext {
                 problem: objective,
                 rng: &mut step_rng(o.seed, generation),
                 first_stream: evaluations,
                 stride: 1,
                 progress: self.progress(evaluations, elapsed()),
+                deadline,
             });
+            if let (Some(cut), Some(before)) = (report.cut, before) {
+                // The state stays that of the last whole generation (which a resume repeats
+                // from, with the same streams); the points evaluated still count for the result.
+                optimizer = before;
+                late = cut.evaluated;
+                break TIME_LIMIT_REACHED.to_string();
+            }
             evaluations = evaluations.saturating_add(report.evaluations);
             generation = generation.saturating_add(1);
             let best = optimizer.best().expect("a best after a step").clone();
@@ -682,17 +697,23 @@ impl<'a> Runner<'a> {
             stale,
         };
         self.write_checkpoint(optimizer.save(), None, counters, &history, &setup)?;
-        let best = optimizer
-            .best()
-            .cloned()
-            .ok_or_else(|| Error::invalid("budget", 0, "the run stopped before any evaluation"))?;
+        let mut best = optimizer.best().cloned();
+        for e in &late {
+            super::keep_best(&mut best, e);
+        }
+        let best = best.ok_or_else(|| self.nothing_evaluated(&stopped))?;
+        let mut candidates = optimizer.candidates();
+        candidates.extend(&late);
         self.conclude(
             objective,
             Conclusion {
                 optimizer: optimizer.name(),
-                candidates: optimizer.candidates(),
+                candidates,
                 best,
-                counters,
+                counters: Counters {
+                    evaluations: evaluations.saturating_add(late.len() as u64),
+                    ..counters
+                },
                 elapsed: &elapsed,
                 stopped,
                 history: &history,
@@ -787,7 +808,7 @@ impl<'a> Runner<'a> {
             return Some("evaluation budget spent".to_string());
         }
         if o.time_limit.is_some_and(|t| elapsed >= t) {
-            return Some("time limit reached".to_string());
+            return Some(TIME_LIMIT_REACHED.to_string());
         }
         match best {
             Some(b) if b.reachability >= 1.0 && stale >= o.patience => Some(format!(
@@ -795,6 +816,27 @@ impl<'a> Runner<'a> {
             )),
             _ => None,
         }
+    }
+
+    /// The error of a run that stopped (`stopped` says why) before it evaluated anything.
+    pub(crate) fn nothing_evaluated(&self, stopped: &str) -> Error {
+        match self.options.time_limit {
+            Some(t) if stopped == TIME_LIMIT_REACHED => Error::invalid(
+                "time_limit",
+                t,
+                "was spent before any design was evaluated: give a larger --time-limit (a total over the run)",
+            ),
+            _ => Error::invalid("budget", 0, "the run stopped before any evaluation"),
+        }
+    }
+
+    /// The instant the run's time limit is up, for a session started at `start` after
+    /// `elapsed_before` seconds of earlier sessions (`None` without a time limit).
+    pub(crate) fn deadline(&self, start: Instant, elapsed_before: f64) -> Option<Instant> {
+        let left = self.options.time_limit? - elapsed_before;
+        // Limits are checked finite; a century stands for "later than any run".
+        let left = Duration::from_secs_f64(left.clamp(0.0, 3.2e9));
+        Some(start.checked_add(left).unwrap_or(start))
     }
 
     /// How far the run is, in [0, 1], by its budgets (for schedules).
