@@ -4,7 +4,7 @@ use kinsynth::optimize::asa::{Asa, AsaParams};
 use kinsynth::optimize::ga::{Ga, GaParams};
 use kinsynth::optimize::pso::{Pso, PsoParams};
 use kinsynth::optimize::testfn::{Rastrigin, Sphere};
-use kinsynth::optimize::{Evaluated, Optimizer, Problem, StepContext};
+use kinsynth::optimize::{Cutoff, Evaluated, Optimizer, Problem, StepContext};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
@@ -21,7 +21,7 @@ fn drive(opt: &mut dyn Optimizer, problem: &dyn Problem, budget: u64, seed: u64)
             first_stream: evaluations,
             stride: 1,
             progress: evaluations as f64 / budget as f64,
-            deadline: None,
+            cutoff: Cutoff::default(),
         });
         evaluations += r.evaluations;
         generation += 1;
@@ -174,7 +174,10 @@ fn a_step_past_its_deadline_is_cut_with_the_points_it_evaluated() {
                 first_stream: 100 * generation,
                 stride: 1,
                 progress: 0.0,
-                deadline: Some(std::time::Instant::now()),
+                cutoff: Cutoff {
+                    deadline: Some(std::time::Instant::now()),
+                    stop: None,
+                },
             });
             let cut = r
                 .cut
@@ -193,7 +196,7 @@ fn a_step_past_its_deadline_is_cut_with_the_points_it_evaluated() {
                 first_stream: 100 * generation,
                 stride: 1,
                 progress: 0.0,
-                deadline: None,
+                cutoff: Cutoff::default(),
             });
             assert!(r.cut.is_none(), "{name}");
             // The cut step's first point is the whole step's first point.

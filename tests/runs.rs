@@ -501,6 +501,52 @@ fn a_time_limit_cuts_a_generation_short_and_resume_repeats_it() {
     assert_eq!(best_without_time(&cut), best_without_time(&whole));
 }
 
+/// Ctrl-C cuts a generation short as a time limit does: a run of 600 designs per generation
+/// (about 2 s each here) interrupted within its first generation ends cleanly, at once, with
+/// the best design evaluated by then.
+#[test]
+fn ctrl_c_cuts_a_generation_short() {
+    let dir = tempfile::tempdir().unwrap();
+    let scenario = scenario_copy(dir.path());
+    let text = std::fs::read_to_string(&scenario).unwrap();
+    std::fs::write(
+        &scenario,
+        text.replace("population = 32", "population = 600"),
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let mut child = optimize(
+        &scenario,
+        &out,
+        &["--time-limit", "600", "--recheck-seeds", "2"],
+    )
+    .stdout(Stdio::null())
+    .stderr(Stdio::null())
+    .spawn()
+    .unwrap();
+    // The lock is taken just before the Ctrl-C handler is set and the run starts.
+    let start = Instant::now();
+    while !out.join(".kinsynth.lock").exists() {
+        assert!(start.elapsed() < Duration::from_secs(60), "no lock");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    std::thread::sleep(Duration::from_millis(300));
+    let status = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    assert!(child.wait().unwrap().success());
+    let best = json(&out.join("best.json"));
+    assert_eq!(best["stopped"], "interrupted");
+    let evaluated = best["evaluations"].as_u64().unwrap();
+    assert!(
+        (1..600).contains(&evaluated),
+        "the first generation is cut short: {evaluated} of 600 evaluated"
+    );
+    assert_eq!(json(&out.join("checkpoint.json"))["generation"], 0);
+}
+
 #[test]
 fn every_help_lists_the_files_its_command_writes() {
     let help = |cmd: &str| {

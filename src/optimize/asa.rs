@@ -177,7 +177,7 @@ impl Optimizer for Asa {
                 ctx.first_stream,
                 ctx.stride,
                 ctx.progress,
-                ctx.deadline,
+                ctx.cutoff,
             ) {
                 Ok(v) => v,
                 Err(cut) => return StepReport::cut(cut),
@@ -203,7 +203,7 @@ impl Optimizer for Asa {
             ctx.first_stream,
             ctx.stride,
             ctx.progress,
-            ctx.deadline,
+            ctx.cutoff,
         ) {
             Ok(v) => v,
             Err(cut) => return StepReport::cut(cut),
@@ -257,7 +257,7 @@ impl Optimizer for Asa {
                 stream,
                 ctx.stride,
                 ctx.progress,
-                ctx.deadline,
+                ctx.cutoff,
             ) {
                 Ok(v) => v,
                 Err(cut) => {

@@ -233,7 +233,7 @@ impl Optimizer for Ga {
             ctx.first_stream,
             ctx.stride,
             ctx.progress,
-            ctx.deadline,
+            ctx.cutoff,
         ) {
             Ok(v) => v,
             Err(cut) => return StepReport::cut(cut),

@@ -19,10 +19,10 @@ pub mod mpi;
 
 pub use super::output::{IslandRow, IslandsInfo};
 use super::runner::{
-    files, history_row, step_rng, Checkpoint, Conclusion, Counters, HistoryRow, Observer,
-    RunOptions, RunSummary, Runner, TIME_LIMIT_REACHED,
+    cut_reason, files, history_row, step_rng, Checkpoint, Conclusion, Counters, HistoryRow,
+    Observer, RunOptions, RunSummary, Runner,
 };
-use super::{Evaluated, Optimizer, StepContext};
+use super::{Cutoff, Evaluated, Optimizer, StepContext};
 use crate::error::{Error, Result};
 use crate::io::write_atomic;
 use serde::{de::DeserializeOwned, Deserialize, Serialize};
@@ -359,7 +359,7 @@ impl<'r, 'a> IslandJob<'r, 'a> {
         let mut last_checkpoint = Instant::now();
         let first_generation = generation;
         let deadline = runner.deadline(start, elapsed_before);
-        // The points of a generation cut short at the time limit (gathered at rank 0).
+        // The points of a generation cut short (time limit, Ctrl-C; gathered at rank 0).
         let (mut late, mut late_count): (Vec<Evaluated>, u64) = (Vec::new(), 0);
         // Rank 0's view of every island: evaluations and best.
         let mut statuses = self.gather_status(comm, &local, &mut timings)?;
@@ -407,16 +407,17 @@ impl<'r, 'a> IslandJob<'r, 'a> {
             let (mut cut, mut was_cut) = (Vec::new(), false);
             for island in &mut local {
                 let i = island.index as u64;
-                if deadline.is_some() {
-                    before.push(island.optimizer.snapshot());
-                }
+                before.push(island.optimizer.snapshot());
                 let report = island.optimizer.step(StepContext {
                     problem: objective,
                     rng: &mut step_rng(o.seed, generation.wrapping_mul(stride).wrapping_add(i)),
                     first_stream: island.evaluations.wrapping_mul(stride).wrapping_add(i),
                     stride,
                     progress: decision.progress,
-                    deadline,
+                    cutoff: Cutoff {
+                        deadline,
+                        stop: Some(stop),
+                    },
                 });
                 match report.cut {
                     Some(c) => {
@@ -428,19 +429,17 @@ impl<'r, 'a> IslandJob<'r, 'a> {
                     }
                 }
             }
-            if deadline.is_some() {
-                // A generation cut short on any rank is undone on every rank: each island
-                // returns to its last whole generation, the points evaluated go to the result.
-                if let Some(points) = self.gather_cut(comm, was_cut, &cut, &mut timings)? {
-                    for (island, was) in local.iter_mut().zip(before) {
-                        island.optimizer = was;
-                    }
-                    // The points gathered at rank 0: every island's whole-generation counts
-                    // stand, so the cut ones are added to the job's total for the result only.
-                    late_count = points.len() as u64;
-                    late = points;
-                    break TIME_LIMIT_REACHED.to_string();
+            // A generation cut short on any rank is undone on every rank: each island returns
+            // to its last whole generation, the points evaluated go to the result.
+            if let Some(points) = self.gather_cut(comm, was_cut, &cut, &mut timings)? {
+                for (island, was) in local.iter_mut().zip(before) {
+                    island.optimizer = was;
                 }
+                // The points gathered at rank 0: every island's whole-generation counts stand,
+                // so the cut ones are added to the job's total for the result only.
+                late_count = points.len() as u64;
+                late = points;
+                break cut_reason(stop);
             }
             generation = generation.saturating_add(1);
             timings.generations += 1;
@@ -655,7 +654,7 @@ impl<'r, 'a> IslandJob<'r, 'a> {
         Ok(())
     }
 
-    /// Whether any rank's islands were cut short at the deadline in this generation (`flag`:
+    /// Whether any rank's islands were cut short in this generation (`flag`:
     /// this rank's were; every rank learns the answer): `Some` with every rank's cut points
     /// (`mine` here; all of them at rank 0, none elsewhere) when one was, else `None`.
     fn gather_cut(

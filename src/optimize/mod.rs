@@ -19,6 +19,7 @@ pub use runner::RunOptions;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 /// A box-bounded minimisation problem whose evaluations may be random (a planner inside) but
@@ -63,24 +64,24 @@ impl Evaluated {
 /// `first_stream + i·stride`, so the results do not depend on the number of threads (`stride`
 /// is 1 for one population; island `i` of `N` uses the streams `≡ i (mod N)`).
 ///
-/// With a `deadline`, a point whose evaluation has not begun when it passes is skipped (the
-/// first point is always evaluated, so that every step evaluates something): the batch is then
-/// [`Cut`], with the points that were evaluated, and the step that asked for it leaves its
-/// result to the caller (see [`Optimizer::step`]).
+/// A point whose evaluation has not begun when the `cutoff` is reached (the time is up, or the
+/// run is told to stop) is skipped; the first point is always evaluated, so that every step
+/// evaluates something. The batch is then [`Cut`], with the points that were evaluated, and the
+/// step that asked for it leaves its result to the caller (see [`Optimizer::step`]).
 pub fn evaluate_batch(
     problem: &dyn Problem,
     xs: Vec<Vec<f64>>,
     first_stream: u64,
     stride: u64,
     progress: f64,
-    deadline: Option<Instant>,
+    cutoff: Cutoff<'_>,
 ) -> Result<Vec<Evaluated>, Cut> {
     let n = xs.len();
     let done: Vec<Evaluated> = xs
         .into_par_iter()
         .enumerate()
         .filter_map(|(i, x)| {
-            if i > 0 && deadline.is_some_and(|d| Instant::now() >= d) {
+            if i > 0 && cutoff.reached() {
                 return None;
             }
             let stream = first_stream.wrapping_add((i as u64).wrapping_mul(stride));
@@ -101,7 +102,26 @@ pub fn evaluate_batch(
     }
 }
 
-/// A batch of evaluations cut short by the deadline of its step: the points that were
+/// When a step's evaluations stop being begun: at a deadline (the run's time limit) or when a
+/// flag is raised (Ctrl-C). The default never comes.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Cutoff<'a> {
+    /// The instant the run's time is up.
+    pub deadline: Option<Instant>,
+    /// Raised to stop the run.
+    pub stop: Option<&'a AtomicBool>,
+}
+
+impl Cutoff<'_> {
+    /// True once the deadline has passed or the flag is raised.
+    #[inline]
+    pub fn reached(&self) -> bool {
+        self.stop.is_some_and(|s| s.load(Ordering::Relaxed))
+            || self.deadline.is_some_and(|d| Instant::now() >= d)
+    }
+}
+
+/// A batch of evaluations cut short by the cutoff of its step: the points that were
 /// evaluated (in stream order), which the step did not take in.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Cut {
@@ -113,9 +133,9 @@ pub struct Cut {
 #[derive(Clone, Debug, PartialEq)]
 pub struct StepReport {
     /// Objective evaluations made in the step (a cut step: those evaluated before the
-    /// deadline).
+    /// cutoff).
     pub evaluations: u64,
-    /// `Some` when the step's deadline cut a batch short: the step is incomplete, the
+    /// `Some` when the step's cutoff cut a batch short: the step is incomplete, the
     /// optimiser's state must be restored from a [`Optimizer::snapshot`] taken before it, and
     /// the points evaluated are offered to the run's result only.
     pub cut: Option<Cut>,
@@ -130,7 +150,7 @@ impl StepReport {
         }
     }
 
-    /// A step cut short at its deadline.
+    /// A step cut short at its cutoff.
     pub fn cut(cut: Cut) -> Self {
         StepReport {
             evaluations: cut.evaluated.len() as u64,
@@ -154,9 +174,9 @@ pub struct StepContext<'a> {
     pub stride: u64,
     /// Progress ∈ [0, 1].
     pub progress: f64,
-    /// When the run's time is up: evaluations not begun by then are skipped and the step is
-    /// cut ([`evaluate_batch`]). `None`: no time limit.
-    pub deadline: Option<Instant>,
+    /// When the step's evaluations stop being begun (the run's time limit, Ctrl-C): the step
+    /// is then cut ([`evaluate_batch`]).
+    pub cutoff: Cutoff<'a>,
 }
 
 /// An optimiser: it proposes points, has them evaluated (in parallel) and updates its state.
@@ -164,7 +184,7 @@ pub struct StepContext<'a> {
 pub trait Optimizer: Send {
     /// The algorithm's name (`ga`, `pso`, `asa`).
     fn name(&self) -> &'static str;
-    /// One generation / iteration. When its [`StepContext::deadline`] cuts a batch short, it
+    /// One generation / iteration. When its [`StepContext::cutoff`] cuts a batch short, it
     /// returns at once with [`StepReport::cut`]; its state may then be half-updated, and the
     /// caller restores the [`Optimizer::snapshot`] it took before the step.
     fn step(&mut self, ctx: StepContext<'_>) -> StepReport;

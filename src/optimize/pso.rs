@@ -251,7 +251,7 @@ impl Optimizer for Pso {
             ctx.first_stream,
             ctx.stride,
             ctx.progress,
-            ctx.deadline,
+            ctx.cutoff,
         ) {
             Ok(v) => v,
             Err(cut) => return StepReport::cut(cut),

@@ -5,7 +5,7 @@ use super::ga::{Ga, GaParams};
 use super::objective::Objective;
 pub use super::output::{files, HistoryRow, RobustReachability, RunSummary};
 use super::pso::{Pso, PsoParams};
-use super::{Evaluated, Optimizer, StepContext};
+use super::{Cutoff, Evaluated, Optimizer, StepContext};
 use crate::error::{Error, Result};
 use crate::io::write_atomic;
 use crate::planning::ReachReport;
@@ -485,6 +485,15 @@ pub(crate) struct Conclusion<'a> {
 /// Why a run stopped when its time limit was reached (between generations or within one).
 pub(crate) const TIME_LIMIT_REACHED: &str = "time limit reached";
 
+/// Why a step was cut short: Ctrl-C, else the time limit.
+pub(crate) fn cut_reason(stop: &AtomicBool) -> String {
+    if stop.load(Ordering::SeqCst) {
+        "interrupted".to_string()
+    } else {
+        TIME_LIMIT_REACHED.to_string()
+    }
+}
+
 /// The random numbers of an optimiser step: the run's seed on stream
 /// `OPTIMIZER_STREAM + stream` (the generation, for one population).
 pub(crate) fn step_rng(seed: u64, stream: u64) -> ChaCha8Rng {
@@ -637,7 +646,7 @@ impl<'a> Runner<'a> {
         let mut last_checkpoint = Instant::now();
         let mut best_cost = optimizer.best().map_or(f64::INFINITY, |b| b.cost);
         let deadline = self.deadline(start, elapsed_before);
-        // The points of a generation cut short at the time limit: offered to the result only.
+        // The points of a generation cut short (time limit, Ctrl-C): offered to the result only.
         let mut late: Vec<Evaluated> = Vec::new();
         let stopped = loop {
             if let Some(why) =
@@ -645,21 +654,24 @@ impl<'a> Runner<'a> {
             {
                 break why;
             }
-            let before = deadline.map(|_| optimizer.snapshot());
+            let before = optimizer.snapshot();
             let report = optimizer.step(StepContext {
                 problem: objective,
                 rng: &mut step_rng(o.seed, generation),
                 first_stream: evaluations,
                 stride: 1,
                 progress: self.progress(evaluations, elapsed()),
-                deadline,
+                cutoff: Cutoff {
+                    deadline,
+                    stop: Some(stop),
+                },
             });
-            if let (Some(cut), Some(before)) = (report.cut, before) {
+            if let Some(cut) = report.cut {
                 // The state stays that of the last whole generation (which a resume repeats
                 // from, with the same streams); the points evaluated still count for the result.
                 optimizer = before;
                 late = cut.evaluated;
-                break TIME_LIMIT_REACHED.to_string();
+                break cut_reason(stop);
             }
             evaluations = evaluations.saturating_add(report.evaluations);
             generation = generation.saturating_add(1);
