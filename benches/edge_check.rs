@@ -3,8 +3,8 @@
 //! - the bundled paper-3d scenario and the pipework mesh scene (vessel hull, pipe-bundle
 //!   decomposition, floor), and the glove box (a triangle-mesh shell) at π/4,
 //!
-//! and the scaling of `segment` and `certified` with clutter: generated cells of 32, 512 and
-//! 2,048 random spheres around the same 8-link arm (fixed seed).
+//! and the scaling of `segment`, `certified` and `ccd` with clutter: generated cells of 32, 512
+//! and 2,048 random spheres around the same 8-link arm (fixed seed).
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use kinsynth::collision::oracle::sample_edges;
@@ -119,7 +119,11 @@ fn scaling(c: &mut Criterion) {
             c,
             &format!("spheres-{n}"),
             &s,
-            &[CheckerKind::Segment, CheckerKind::Certified],
+            &[
+                CheckerKind::Segment,
+                CheckerKind::Certified,
+                CheckerKind::Ccd,
+            ],
             &[PI4],
         );
     }

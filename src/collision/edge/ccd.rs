@@ -13,8 +13,9 @@
 //!
 //! Each body rides on its carrier frame (the frame after the last free axis that moves it, or
 //! the base). Each capsule (radius inflated by the clearance `ε`, since the nonlinear cast has no
-//! target distance) is cast against each obstacle the broad phase cannot rule out (its bounding
-//! sphere farther than the body's motion bound for the sub-step); a solid is cast as it is and
+//! target distance) is cast against each obstacle the broad phase cannot rule out (the scene's
+//! hierarchy, then the obstacle's bounding sphere, farther than the body's motion bound for the
+//! sub-step); a solid is cast as it is and
 //! also checked at the sub-step's end with the clearance. Self pairs are cast against each other,
 //! both moving. A hit, an initial penetration, or a `Failed` status counts as a collision. What this still misses is measured against the oracle
 //! (see the README).
@@ -167,6 +168,7 @@ impl EdgeChecker for Ccd {
             pa,
             pb,
             ccd: moving,
+            near,
             ..
         } = scratch;
         let body = &**body;
@@ -198,7 +200,13 @@ impl EdgeChecker for Ccd {
                 } else {
                     body.solids()[b - ns].shape.as_ref()
                 };
-                for k in 0..scene.len() {
+                // Broad phase: the obstacles near the ball around the body at the sub-step's
+                // start grown by its motion bound (the hierarchy: the cost follows the nearby
+                // obstacles, not their number); then their bounding spheres.
+                let (center, radius) = body.ball(fa, pa, b);
+                scene.near(&center, radius + step_reach, eps, near);
+                for &k in near.iter() {
+                    let k = k as usize;
                     if body.obstacle_lower_bound(scene, fa, pa, b, k) - eps > step_reach {
                         continue;
                     }
