@@ -66,6 +66,15 @@ pub fn iteration_cap(axes: usize, ik_steps: usize) -> usize {
     let by_ik = MAX_IK_AXIS_STEPS / axes / ik_steps.max(1);
     by_search.min(by_ik).clamp(1, MAX_ITERATIONS)
 }
+/// Most shape casts the `ccd` checker makes in one planner run (one body against one obstacle,
+/// or one self pair, over one sub-step; against a triangle mesh, one per
+/// [`crate::collision::edge::ccd::TRIANGLES_PER_CAST`] triangles): its cost per edge grows with
+/// the motion and the bodies, up to 64 sub-steps of every one, which the iteration limits do
+/// not see. A cast costs 7–13 µs on this machine (a 64-link arm with `l_max = 100`, paper-3d,
+/// the glove box), so the limit stands for 20–40 s. A run that reaches it stops, as at its
+/// iteration budget.
+pub const MAX_CCD_CASTS: u64 = 3_000_000;
+
 /// Most random configurations sampled for the allowed-collision matrix
 /// (`robot.self_collision_samples`; MoveIt's setup assistant offers up to 100,000).
 pub const MAX_SELF_COLLISION_SAMPLES: usize = 100_000;

@@ -282,6 +282,16 @@ fn plan(
             let o = orientations.get(index).copied().unwrap_or_default();
             let error = (ee - p).norm();
             let angle = (!o.is_free()).then(|| o.error(&rot));
+            // A run stopped by the checker's work limit says so where it gives its iterations.
+            let spent = if growth.work_limited {
+                format!(
+                    "{} iterations, stopped at the ccd checker's work limit of {} shape casts per run",
+                    growth.iterations,
+                    crate::limits::MAX_CCD_CASTS
+                )
+            } else {
+                format!("{} iterations", growth.iterations)
+            };
             let reason = (!reached).then(|| {
                 let far = (p - origin).norm();
                 if growth.home_blocked {
@@ -294,19 +304,18 @@ fn plan(
                     why
                 } else if o.is_free() {
                     format!(
-                        "no collision-free path brought the tool within {} m of the point in {} iterations (closest {error:.4} m)",
-                        config.goal_tolerance, growth.iterations
+                        "no collision-free path brought the tool within {} m of the point in {spent} (closest {error:.4} m)",
+                        config.goal_tolerance
                     )
                 } else {
                     format!(
-                        "no collision-free path brought the tool within {} m of the point and {:.1}° of the task's {} in {} iterations (closest node: {error:.4} m, {:.1}°)",
+                        "no collision-free path brought the tool within {} m of the point and {:.1}° of the task's {} in {spent} (closest node: {error:.4} m, {:.1}°)",
                         config.goal_tolerance,
                         o.tolerance().to_degrees(),
                         match o {
                             TaskOrientation::Approach { .. } => "approach direction",
                             _ => "orientation",
                         },
-                        growth.iterations,
                         angle.unwrap_or(0.0).to_degrees()
                     )
                 }

@@ -208,6 +208,9 @@ pub struct Growth {
     pub joins: usize,
     /// True when the home configuration is not collision-free.
     pub home_blocked: bool,
+    /// True when the run stopped because its checker's work reached
+    /// [`crate::limits::MAX_CCD_CASTS`] (before the iteration budget).
+    pub work_limited: bool,
 }
 
 impl Growth {
@@ -220,6 +223,7 @@ impl Growth {
             iterations: 0,
             joins: 0,
             home_blocked: true,
+            work_limited: false,
         }
     }
 }
@@ -300,6 +304,8 @@ pub struct Rrt<'a> {
     tasks: &'a [Point3<f64>],
     /// One per task, or empty: every task is a point task.
     orientations: &'a [TaskOrientation],
+    /// Most shape casts of the checker per run ([`crate::limits::MAX_CCD_CASTS`]).
+    cast_cap: u64,
 }
 
 impl<'a> Rrt<'a> {
@@ -317,7 +323,15 @@ impl<'a> Rrt<'a> {
             config,
             tasks,
             orientations: &[],
+            cast_cap: crate::limits::MAX_CCD_CASTS,
         }
+    }
+
+    /// The same planner with another cap on the checker's shape casts (tests).
+    #[cfg(test)]
+    fn with_cast_cap(mut self, cap: u64) -> Self {
+        self.cast_cap = cap;
+        self
     }
 
     /// The same planner with an orientation constraint per task (`orientations` has one entry
@@ -705,6 +719,7 @@ impl<'a> Rrt<'a> {
                 iterations: 0,
                 joins: 0,
                 home_blocked: true,
+                work_limited: false,
             };
         }
         chain.fk(&home, &mut s.work.frames);
@@ -718,6 +733,8 @@ impl<'a> Rrt<'a> {
         );
         let start = Instant::now();
         let mut iterations = 0;
+        let casts_before = scratch.stats.casts;
+        let mut work_limited = false;
         while s
             .reached
             .iter()
@@ -732,6 +749,12 @@ impl<'a> Rrt<'a> {
                 if start.elapsed().as_secs_f64() > limit {
                     break;
                 }
+            }
+            // `ccd`'s cost per edge grows with the motion and the bodies (up to 64 sub-steps
+            // of every body and self pair): its work, counted in shape casts, is capped.
+            if scratch.stats.casts - casts_before >= self.cast_cap {
+                work_limited = true;
+                break;
             }
             iterations += 1;
             if chain.dof() == 0 {
@@ -760,6 +783,7 @@ impl<'a> Rrt<'a> {
             iterations,
             joins: s.joins,
             home_blocked: false,
+            work_limited,
         }
     }
 }
@@ -898,6 +922,49 @@ mod tests {
         assert_eq!(
             main.path_to(offset + 1),
             vec![vec![0.0, 0.0], vec![0.3, 0.0], vec![0.6, 0.0]]
+        );
+    }
+
+    /// `ccd`'s work is capped: a run whose task lies inside an obstacle (so it would spend its
+    /// whole budget) stops once its shape casts reach the cap, within one edge's casts of it,
+    /// and says so; with the real cap the same run spends its iteration budget.
+    #[test]
+    fn the_ccd_checkers_work_is_capped() {
+        use crate::collision::{make_checker, BodyModel, CheckerKind, CollisionScene};
+        use std::sync::Arc;
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("examples/scenarios/paper-2d.toml");
+        let s = crate::Scenario::load(&path).unwrap();
+        let chain = s.space.largest().chain();
+        let scene = Arc::new(CollisionScene::new(&s.workspace));
+        let t = s.workspace.obstacles[0].pose().translation;
+        let inside = Point3::new(t.x, t.y, t.z);
+        let tasks = [inside];
+        let mut config = s.planner.clone();
+        config.checker = CheckerKind::Ccd;
+        config.max_iterations = 300;
+        config.budget_growth = 1;
+        let checker = make_checker(CheckerKind::Ccd, scene, BodyModel::Capsules);
+        let run = |cap: u64| {
+            let mut scratch = Scratch::new(&chain);
+            let rrt = Rrt::new(&chain, checker.as_ref(), &config, &tasks).with_cast_cap(cap);
+            let mut rng = rand::SeedableRng::seed_from_u64(4);
+            let growth = rrt.grow(&mut rng, &mut scratch);
+            (growth, scratch.stats.casts, scratch.stats.edges)
+        };
+        let (whole, casts, edges) = run(crate::limits::MAX_CCD_CASTS);
+        assert!(!whole.work_limited);
+        assert_eq!(whole.iterations, 300);
+        assert!(whole.reached[0].is_none());
+        let cap = casts / 3;
+        let (capped, spent, _) = run(cap);
+        assert!(capped.work_limited);
+        assert!(capped.iterations < 300, "{}", capped.iterations);
+        // The check comes before each iteration: at most one iteration's casts beyond the cap.
+        let per_edge = casts / edges.max(1);
+        assert!(
+            spent >= cap && spent < cap + 50 * per_edge.max(1),
+            "{spent} vs {cap}"
         );
     }
 

@@ -88,6 +88,10 @@ pub struct EdgeStats {
     /// `certified`) of the first links only ([`Chain::fk_links`]); none for a configuration
     /// `certified` kept from an earlier check.
     pub fk: u64,
+    /// Shape casts made by `ccd` (its unit of work: one body against one obstacle, or one
+    /// self pair, over one sub-step; a cast against a triangle mesh counts one per
+    /// [`ccd::TRIANGLES_PER_CAST`] of its triangles).
+    pub casts: u64,
 }
 
 /// Per-thread working memory of the checkers for one chain: frame buffers, point buffers,
