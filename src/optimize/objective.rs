@@ -2,8 +2,9 @@
 //! links and few joints.
 
 use super::Problem;
-use crate::collision::CollisionScene;
+use crate::collision::{CollisionScene, RobotBody};
 use crate::design::{Design, DesignSpace};
+use crate::kinematics::Chain;
 use crate::planning::{PlannerConfig, ReachReport};
 use crate::scenario::{ObjectiveWeights, Scenario};
 use nalgebra::Point3;
@@ -77,6 +78,16 @@ pub fn breakdown(design: &Design, r: f64, w: &ObjectiveWeights) -> Breakdown {
 /// `CONFIRM_STREAM + k·m + j`, apart from the evaluations' own streams `k`.
 pub const CONFIRM_STREAM: u64 = 1 << 52;
 
+/// A design decoded for planning, with its chain and robot body ([`Objective::prepare`]).
+pub struct Prepared {
+    /// The design.
+    pub design: Design,
+    /// Its kinematic chain.
+    pub chain: Chain,
+    /// Its robot body, shared by its planner runs.
+    pub body: Arc<RobotBody>,
+}
+
 /// One evaluation of a design: the reachability report of the planner run that set its `R`, the
 /// stream of that run and the terms of Eq. 23.
 #[derive(Clone, Debug)]
@@ -146,11 +157,37 @@ impl Objective {
     /// One planner run for `x` with the random stream `(seed, stream)`: its report and the
     /// breakdown of Eq. 23. No confirmation.
     pub fn plan_once(&self, x: &[f64], stream: u64, progress: f64) -> (ReachReport, Breakdown) {
+        self.plan_design(&self.prepare(x), stream, progress)
+    }
+
+    /// What every planner run of `x` shares: its design, chain and robot body (the capsules
+    /// with their allowed-collision matrix, which samples the chain's configurations), built
+    /// once for the runs of one evaluation or re-check.
+    pub fn prepare(&self, x: &[f64]) -> Prepared {
         let design = self.space.decode(x);
         let chain = design.chain();
-        let report = crate::planning::reachability_tasks(
+        let body = Arc::new(RobotBody::new(
             &chain,
-            None,
+            Vec::new(),
+            &self.planner.self_collision,
+        ));
+        Prepared {
+            design,
+            chain,
+            body,
+        }
+    }
+
+    /// [`Objective::plan_once`] for a prepared design.
+    pub fn plan_design(
+        &self,
+        d: &Prepared,
+        stream: u64,
+        progress: f64,
+    ) -> (ReachReport, Breakdown) {
+        let report = crate::planning::reachability_tasks(
+            &d.chain,
+            Some(d.body.clone()),
             &self.scene,
             &self.tasks,
             &self.orientations,
@@ -158,7 +195,7 @@ impl Objective {
             self.seed,
             stream,
         );
-        let b = breakdown(&design, report.reachability, &self.weights);
+        let b = breakdown(&d.design, report.reachability, &self.weights);
         (report, b)
     }
 
@@ -182,7 +219,8 @@ impl Objective {
     /// Evaluates `x` as the optimisers do: one planner run on `stream`, and when it reaches
     /// every task, the confirmation runs; the first of them that falls short sets `R`.
     pub fn evaluate_confirmed(&self, x: &[f64], stream: u64, progress: f64) -> Evaluation {
-        let (mut report, mut b) = self.plan_once(x, stream, progress);
+        let prepared = self.prepare(x);
+        let (mut report, mut b) = self.plan_design(&prepared, stream, progress);
         let mut worst = stream;
         let mut planner_runs = 1;
         if report.reachability >= 1.0 {
@@ -190,7 +228,7 @@ impl Objective {
                 let s = CONFIRM_STREAM
                     .wrapping_add(stream.wrapping_mul(self.confirm as u64))
                     .wrapping_add(j);
-                let (r, rb) = self.plan_once(x, s, progress);
+                let (r, rb) = self.plan_design(&prepared, s, progress);
                 planner_runs += 1;
                 if r.reachability < report.reachability {
                     (report, b, worst) = (r, rb, s);
@@ -274,6 +312,46 @@ mod tests {
             ],
             tool: None,
         }
+    }
+
+    /// A design's planner runs share one robot body ([`Objective::prepare`]): each gives the
+    /// report of a planner run that builds its own, on paper-3d (self-collision on), for random
+    /// designs and several streams.
+    #[test]
+    fn runs_that_share_a_body_plan_as_runs_that_build_their_own() {
+        use rand::{RngExt, SeedableRng};
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("examples/scenarios/paper-3d.toml");
+        let s = Scenario::load(&path).unwrap();
+        let o = Objective::new(&s, s.planner.clone(), 7);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(2);
+        let mut reached = 0;
+        for _ in 0..4 {
+            let x: Vec<f64> = o
+                .lower
+                .iter()
+                .zip(&o.upper)
+                .map(|(l, u)| if l < u { rng.random_range(*l..=*u) } else { *l })
+                .collect();
+            let prepared = o.prepare(&x);
+            assert!(!prepared.body.self_pairs().is_empty());
+            for stream in 0..3 {
+                let (shared, _) = o.plan_design(&prepared, stream, 0.5);
+                let own = crate::planning::reachability(
+                    &prepared.chain,
+                    &o.scene,
+                    &o.tasks,
+                    &o.planner_at(0.5),
+                    7,
+                    stream,
+                );
+                assert_eq!(shared.targets, own.targets);
+                assert_eq!(shared.iterations, own.iterations);
+                assert_eq!(shared.edge_checks, own.edge_checks);
+                reached += shared.targets.iter().filter(|t| t.reached).count();
+            }
+        }
+        assert!(reached > 0, "the designs reach something");
     }
 
     fn weights() -> ObjectiveWeights {

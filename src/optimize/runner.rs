@@ -972,12 +972,17 @@ impl<'a> Runner<'a> {
         let jobs: Vec<(usize, u64)> = (0..chosen.len())
             .flat_map(|c| (0..k as u64).map(move |j| (c, j)))
             .collect();
+        // Each candidate's chain and body are built once for its re-check runs.
+        let prepared: Vec<_> = chosen
+            .par_iter()
+            .map(|(e, _)| objective.prepare(&e.x))
+            .collect();
         let values: Vec<f64> = jobs
             .par_iter()
             .map(|&(c, j)| {
                 let e = &chosen[c].0;
                 objective
-                    .plan_once(&e.x, RECHECK_STREAM + j, e.progress)
+                    .plan_design(&prepared[c], RECHECK_STREAM + j, e.progress)
                     .0
                     .reachability
             })
