@@ -45,7 +45,8 @@ pub struct Args {
     #[arg(long, conflicts_with = "resume")]
     pub seed: Option<u64>,
     /// Wall-clock budget in seconds, over the whole run (with --resume: a new total, which
-    /// extends the run). Default: the scenario's budgets, when neither --time-limit nor
+    /// extends the run); the generation running when it is up stops there, keeping the designs
+    /// it evaluated. Default: the scenario's budgets, when neither --time-limit nor
     /// --evaluations is given (either replaces both of the scenario's).
     #[arg(long)]
     pub time_limit: Option<f64>,
@@ -327,8 +328,8 @@ pub fn prepare(args: &Args) -> Result<Prepared, kinsynth::Error> {
     })
 }
 
-/// Raises the returned flag on Ctrl-C (the run stops after its generation and writes its
-/// results); a second Ctrl-C ends the process at once, removing the lock file (the operating
+/// Raises the returned flag on Ctrl-C (the run stops within its generation, keeping the designs
+/// evaluated, and writes its results); a second Ctrl-C ends the process at once, removing the lock file (the operating
 /// system releases the lock itself).
 pub fn stop_on_ctrl_c() -> std::sync::Arc<std::sync::atomic::AtomicBool> {
     let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
