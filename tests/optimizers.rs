@@ -161,24 +161,29 @@ fn a_step_past_its_deadline_is_cut_with_the_points_it_evaluated() {
             ))
         }),
     ];
+    // Step `generation` of `opt`, with `cutoff`.
+    let step = |opt: &mut dyn Optimizer, generation: u64, cutoff: Cutoff<'_>| {
+        let mut rng = ChaCha8Rng::seed_from_u64(9);
+        rng.set_stream(generation);
+        opt.step(StepContext {
+            problem: &problem,
+            rng: &mut rng,
+            first_stream: 100 * generation,
+            stride: 1,
+            progress: 0.0,
+            cutoff,
+        })
+    };
+    let past = Cutoff {
+        deadline: Some(std::time::Instant::now()),
+        stop: None,
+    };
     for (name, make) in makers {
         let mut opt = make();
         for generation in 0..3u64 {
             let before = opt.snapshot();
             let saved = before.save();
-            let mut rng = ChaCha8Rng::seed_from_u64(9);
-            rng.set_stream(generation);
-            let r = opt.step(StepContext {
-                problem: &problem,
-                rng: &mut rng,
-                first_stream: 100 * generation,
-                stride: 1,
-                progress: 0.0,
-                cutoff: Cutoff {
-                    deadline: Some(std::time::Instant::now()),
-                    stop: None,
-                },
-            });
+            let r = step(opt.as_mut(), generation, past);
             let cut = r
                 .cut
                 .unwrap_or_else(|| panic!("{name}: step {generation} not cut"));
@@ -188,16 +193,7 @@ fn a_step_past_its_deadline_is_cut_with_the_points_it_evaluated() {
             // Restored, the state is the one before the step; a whole step then goes on.
             opt = before;
             assert_eq!(opt.save(), saved, "{name}");
-            let mut rng = ChaCha8Rng::seed_from_u64(9);
-            rng.set_stream(generation);
-            let r = opt.step(StepContext {
-                problem: &problem,
-                rng: &mut rng,
-                first_stream: 100 * generation,
-                stride: 1,
-                progress: 0.0,
-                cutoff: Cutoff::default(),
-            });
+            let r = step(opt.as_mut(), generation, Cutoff::default());
             assert!(r.cut.is_none(), "{name}");
             // The cut step's first point is the whole step's first point.
             assert!(r.evaluations >= cut.evaluated.len() as u64, "{name}");

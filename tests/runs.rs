@@ -442,6 +442,19 @@ fn resume_with_a_larger_budget_extends_the_run_to_the_uninterrupted_result() {
     );
 }
 
+/// paper-2d with 600 designs per generation (about 2 s of evaluations here), in `dir`.
+fn wide_scenario(dir: &Path) -> PathBuf {
+    let scenario = scenario_copy(dir);
+    let text = std::fs::read_to_string(&scenario).unwrap();
+    assert!(text.contains("population = 32"));
+    std::fs::write(
+        &scenario,
+        text.replace("population = 32", "population = 600"),
+    )
+    .unwrap();
+    scenario
+}
+
 /// A time limit cuts a generation short instead of waiting for it: with 600 designs per
 /// generation (about 2 s of evaluations here) and `--time-limit 0.3`, the run stops within the
 /// first generation and its result is the best design evaluated by then. The checkpoint stays
@@ -450,13 +463,7 @@ fn resume_with_a_larger_budget_extends_the_run_to_the_uninterrupted_result() {
 #[test]
 fn a_time_limit_cuts_a_generation_short_and_resume_repeats_it() {
     let dir = tempfile::tempdir().unwrap();
-    let scenario = scenario_copy(dir.path());
-    let text = std::fs::read_to_string(&scenario).unwrap();
-    std::fs::write(
-        &scenario,
-        text.replace("population = 32", "population = 600"),
-    )
-    .unwrap();
+    let scenario = wide_scenario(dir.path());
     let recheck = ["--recheck-seeds", "2"];
     let cut = dir.path().join("cut");
     ok(&optimize(
@@ -507,13 +514,7 @@ fn a_time_limit_cuts_a_generation_short_and_resume_repeats_it() {
 #[test]
 fn ctrl_c_cuts_a_generation_short() {
     let dir = tempfile::tempdir().unwrap();
-    let scenario = scenario_copy(dir.path());
-    let text = std::fs::read_to_string(&scenario).unwrap();
-    std::fs::write(
-        &scenario,
-        text.replace("population = 32", "population = 600"),
-    )
-    .unwrap();
+    let scenario = wide_scenario(dir.path());
     let out = dir.path().join("out");
     let mut child = optimize(
         &scenario,

@@ -17,8 +17,8 @@
 //! acceptance temperature restarts from the best cost's scale.
 
 use super::{
-    best_distinct, check_evaluated, check_len, check_points, evaluate_batch, keep_best,
-    random_point, Cut, Evaluated, Optimizer, StepContext, StepReport,
+    best_distinct, check_evaluated, check_len, check_points, keep_best, random_point, Cut,
+    Evaluated, Optimizer, StepContext, StepReport,
 };
 use crate::limits::{MAX_POPULATION, MAX_SETTING};
 use crate::scenario::{check, check_count, check_positive_within};
@@ -162,6 +162,7 @@ impl Optimizer for Asa {
     fn step(&mut self, ctx: StepContext<'_>) -> StepReport {
         let (lower, upper) = (ctx.problem.lower(), ctx.problem.upper());
         let d = lower.len();
+        let batch = ctx.batch();
         let rng = ctx.rng;
         let Some(current) = self.current.clone() else {
             // First step: the start point plus a batch of random points, whose cost spread sets
@@ -171,14 +172,7 @@ impl Optimizer for Asa {
                 xs.push(random_point(lower, upper, rng));
             }
             let n = xs.len() as u64;
-            let ev = match evaluate_batch(
-                ctx.problem,
-                xs,
-                ctx.first_stream,
-                ctx.stride,
-                ctx.progress,
-                ctx.cutoff,
-            ) {
+            let ev = match batch.evaluate(xs) {
                 Ok(v) => v,
                 Err(cut) => return StepReport::cut(cut),
             };
@@ -197,14 +191,7 @@ impl Optimizer for Asa {
             .map(|_| self.generate(&current.x, lower, upper, rng))
             .collect();
         let mut evaluations = xs.len() as u64;
-        let ev = match evaluate_batch(
-            ctx.problem,
-            xs,
-            ctx.first_stream,
-            ctx.stride,
-            ctx.progress,
-            ctx.cutoff,
-        ) {
+        let ev = match batch.evaluate(xs) {
             Ok(v) => v,
             Err(cut) => return StepReport::cut(cut),
         };
@@ -247,18 +234,9 @@ impl Optimizer for Asa {
                     x
                 })
                 .collect();
-            let stream = ctx
-                .first_stream
-                .wrapping_add(evaluations.wrapping_mul(ctx.stride));
+            let probing = batch.after(evaluations);
             evaluations += probes.len() as u64;
-            let ev = match evaluate_batch(
-                ctx.problem,
-                probes,
-                stream,
-                ctx.stride,
-                ctx.progress,
-                ctx.cutoff,
-            ) {
+            let ev = match probing.evaluate(probes) {
                 Ok(v) => v,
                 Err(cut) => {
                     let mut evaluated = taken;

@@ -3,8 +3,8 @@
 //! sets a variable to zero, and elitism.
 
 use super::{
-    best_distinct, check_evaluated, check_points, evaluate_batch, keep_best, random_point,
-    Evaluated, Optimizer, StepContext, StepReport,
+    best_distinct, check_evaluated, check_points, keep_best, random_point, Evaluated, Optimizer,
+    StepContext, StepReport,
 };
 use crate::limits::{MAX_POPULATION, MAX_SETTING};
 use crate::scenario::{check, check_count, check_non_negative_within};
@@ -178,6 +178,7 @@ impl Optimizer for Ga {
         let (lower, upper) = (ctx.problem.lower(), ctx.problem.upper());
         let dim = lower.len();
         let n = self.params.population.max(2);
+        let batch = ctx.batch();
         let rng = ctx.rng;
         let xs: Vec<Vec<f64>> = if self.population.is_empty() {
             let mut xs: Vec<Vec<f64>> = self.seeds.iter().take(n).cloned().collect();
@@ -227,14 +228,7 @@ impl Optimizer for Ga {
             children
         };
         let evaluations = xs.len() as u64;
-        let evaluated = match evaluate_batch(
-            ctx.problem,
-            xs,
-            ctx.first_stream,
-            ctx.stride,
-            ctx.progress,
-            ctx.cutoff,
-        ) {
+        let evaluated = match batch.evaluate(xs) {
             Ok(v) => v,
             Err(cut) => return StepReport::cut(cut),
         };

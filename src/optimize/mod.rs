@@ -179,6 +179,54 @@ pub struct StepContext<'a> {
     pub cutoff: Cutoff<'a>,
 }
 
+impl<'a> StepContext<'a> {
+    /// How the step's evaluations are numbered and cut, starting at its first stream.
+    pub fn batch(&self) -> Batch<'a> {
+        Batch {
+            problem: self.problem,
+            first_stream: self.first_stream,
+            stride: self.stride,
+            progress: self.progress,
+            cutoff: self.cutoff,
+        }
+    }
+}
+
+/// A step's evaluations: the problem, the random streams (`first_stream + i·stride` for point
+/// `i`), the progress and the cutoff ([`StepContext::batch`]).
+#[derive(Clone, Copy)]
+pub struct Batch<'a> {
+    problem: &'a dyn Problem,
+    first_stream: u64,
+    stride: u64,
+    progress: f64,
+    cutoff: Cutoff<'a>,
+}
+
+impl<'a> Batch<'a> {
+    /// The same numbering `count` evaluations on (for a second batch within a step).
+    pub fn after(self, count: u64) -> Batch<'a> {
+        Batch {
+            first_stream: self
+                .first_stream
+                .wrapping_add(count.wrapping_mul(self.stride)),
+            ..self
+        }
+    }
+
+    /// Evaluates `xs` ([`evaluate_batch`]): all of them, or [`Cut`] at the cutoff.
+    pub fn evaluate(&self, xs: Vec<Vec<f64>>) -> Result<Vec<Evaluated>, Cut> {
+        evaluate_batch(
+            self.problem,
+            xs,
+            self.first_stream,
+            self.stride,
+            self.progress,
+            self.cutoff,
+        )
+    }
+}
+
 /// An optimiser: it proposes points, has them evaluated (in parallel) and updates its state.
 /// The whole state serialises, so a run can be checkpointed and resumed.
 pub trait Optimizer: Send {

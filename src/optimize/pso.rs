@@ -9,8 +9,8 @@
 //! * `global`: the classic swarm, pulled toward its own best and the swarm's best.
 
 use super::{
-    best_distinct, check_evaluated, check_len, check_points, evaluate_batch, keep_best,
-    random_point, Evaluated, Optimizer, StepContext, StepReport,
+    best_distinct, check_evaluated, check_len, check_points, keep_best, random_point, Evaluated,
+    Optimizer, StepContext, StepReport,
 };
 use crate::limits::{MAX_POPULATION, MAX_SETTING};
 use crate::scenario::{check_count, check_non_negative_within};
@@ -181,6 +181,7 @@ impl Optimizer for Pso {
 
     fn step(&mut self, ctx: StepContext<'_>) -> StepReport {
         let (lower, upper) = (ctx.problem.lower(), ctx.problem.upper());
+        let batch = ctx.batch();
         let rng = ctx.rng;
         let vmax: Vec<f64> = lower
             .iter()
@@ -245,14 +246,7 @@ impl Optimizer for Pso {
             self.particles.iter().map(|p| p.x.clone()).collect()
         };
         let evaluations = xs.len() as u64;
-        let evaluated = match evaluate_batch(
-            ctx.problem,
-            xs,
-            ctx.first_stream,
-            ctx.stride,
-            ctx.progress,
-            ctx.cutoff,
-        ) {
+        let evaluated = match batch.evaluate(xs) {
             Ok(v) => v,
             Err(cut) => return StepReport::cut(cut),
         };
