@@ -327,6 +327,9 @@ fn a_time_limit_cuts_an_island_generation_short_on_every_rank() {
         summary.evaluations
     );
     assert!(summary.cost.is_finite());
+    // history.csv has one row, for the cut generation; the checkpoint none.
+    let history = std::fs::read_to_string(out.join("history.csv")).unwrap();
+    assert_eq!(history.lines().count(), 2, "{history}");
     let checkpoint: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("checkpoint.json")).unwrap())
             .unwrap();

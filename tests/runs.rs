@@ -481,6 +481,10 @@ fn a_time_limit_cuts_a_generation_short_and_resume_repeats_it() {
         "the first generation is cut short: {evaluated} of 600 evaluated"
     );
     assert!(best["cost"].as_f64().unwrap().is_finite());
+    // history.csv ends with the cut generation, as best.json does.
+    let history = std::fs::read_to_string(cut.join("history.csv")).unwrap();
+    let last: Vec<&str> = history.lines().last().unwrap().split(',').collect();
+    assert_eq!(last[1], evaluated.to_string(), "{history}");
     let checkpoint = json(&cut.join("checkpoint.json"));
     assert_eq!(checkpoint["generation"], 0);
     assert_eq!(checkpoint["evaluations"], 0);

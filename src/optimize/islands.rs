@@ -514,6 +514,11 @@ impl<'r, 'a> IslandJob<'r, 'a> {
         let mut candidates: Vec<&Evaluated> =
             optimizers.iter().flat_map(|o| o.candidates()).collect();
         candidates.extend(&late);
+        // history.csv ends with the cut generation (the checkpoint keeps whole generations).
+        if !late.is_empty() {
+            let total = counters.evaluations.saturating_add(late_count);
+            history.push(history_row(objective, &best, total, elapsed())?);
+        }
         let summary = runner.conclude(
             objective,
             Conclusion {

@@ -716,6 +716,13 @@ impl<'a> Runner<'a> {
         let best = best.ok_or_else(|| self.nothing_evaluated(&stopped))?;
         let mut candidates = optimizer.candidates();
         candidates.extend(&late);
+        // history.csv ends with the cut generation, so that it agrees with best.json (the
+        // checkpoint, written above, keeps the whole generations only).
+        let mut history = history;
+        if !late.is_empty() {
+            let total = evaluations.saturating_add(late.len() as u64);
+            history.push(history_row(objective, &best, total, elapsed())?);
+        }
         self.conclude(
             objective,
             Conclusion {
