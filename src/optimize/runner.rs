@@ -718,7 +718,6 @@ impl<'a> Runner<'a> {
         candidates.extend(&late);
         // history.csv ends with the cut generation, so that it agrees with best.json (the
         // checkpoint, written above, keeps the whole generations only).
-        let mut history = history;
         if !late.is_empty() {
             let total = evaluations.saturating_add(late.len() as u64);
             history.push(history_row(objective, &best, total, elapsed())?);
