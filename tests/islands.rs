@@ -301,16 +301,17 @@ fn islands_on_ranks(
     })
 }
 
-/// A time limit cuts an island generation short on every rank together: 4 islands of 200
-/// designs over 2 ranks (about 1.5 s per generation here) under a 0.3 s limit stop within the
-/// first generation, with the best design evaluated by then; the checkpoint stays at the last
-/// whole generation (none).
+/// A time limit cuts an island generation short on every rank together: 8 islands of 50
+/// designs over 2 ranks (4 islands stepped in turn per rank, about 0.1 s each here) under a
+/// 0.3 s limit stop within the first generation, some islands having finished their step and
+/// the later ones cut. Every island returns to its last whole generation (none), counts
+/// included, and the designs evaluated still give the result.
 #[test]
 fn a_time_limit_cuts_an_island_generation_short_on_every_rank() {
     let dir = tempfile::tempdir().unwrap();
     let text = std::fs::read_to_string(small_scenario(dir.path()))
         .unwrap()
-        .replace("population = 8", "population = 200");
+        .replace("population = 8", "population = 50");
     let scenario = dir.path().join("wide.toml");
     std::fs::write(&scenario, text).unwrap();
     let out = dir.path().join("cut");
@@ -319,11 +320,11 @@ fn a_time_limit_cuts_an_island_generation_short_on_every_rank() {
         evaluations: None,
         ..options(Algorithm::Ga, 0)
     };
-    let summary = islands_on_ranks(&scenario, &out, 4, 2, o);
+    let summary = islands_on_ranks(&scenario, &out, 8, 2, o);
     assert_eq!(summary.stopped, "time limit reached");
     assert!(
-        (1..800).contains(&summary.evaluations),
-        "the first generation is cut short: {} of 800 evaluated",
+        (1..400).contains(&summary.evaluations),
+        "the first generation is cut short: {} of 400 evaluated",
         summary.evaluations
     );
     assert!(summary.cost.is_finite());
@@ -335,6 +336,9 @@ fn a_time_limit_cuts_an_island_generation_short_on_every_rank() {
             .unwrap();
     assert_eq!(checkpoint["generation"], 0);
     assert_eq!(checkpoint["evaluations"], 0);
+    let per_island = checkpoint["islands"]["evaluations"].as_array().unwrap();
+    assert_eq!(per_island.len(), 8);
+    assert!(per_island.iter().all(|e| e == 0), "{per_island:?}");
 }
 
 #[test]

@@ -283,6 +283,16 @@ struct Decision {
 }
 
 /// An island held by this process.
+/// What a rank's islands did in a generation, for the decision to undo it: whether one was
+/// cut short, the evaluations made, and the points that count for the result if it is undone
+/// (the cut steps' evaluations, the best of each whole step made after the cutoff).
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+struct CutReport {
+    cut: bool,
+    evaluations: u64,
+    points: Vec<Evaluated>,
+}
+
 struct Island {
     index: usize,
     optimizer: Box<dyn Optimizer>,
@@ -403,42 +413,58 @@ impl<'r, 'a> IslandJob<'r, 'a> {
             if let Some(why) = decision.stop {
                 break why;
             }
+            // Each island's state and count before the step, to return to if the generation
+            // is cut short anywhere.
             let mut before = Vec::new();
-            let (mut cut, mut was_cut) = (Vec::new(), false);
-            for island in &mut local {
+            let mut mine = CutReport::default();
+            let cutoff = Cutoff {
+                deadline,
+                stop: Some(stop),
+            };
+            let mut whole = Vec::new();
+            for (k, island) in local.iter_mut().enumerate() {
                 let i = island.index as u64;
-                before.push(island.optimizer.snapshot());
+                before.push((island.optimizer.snapshot(), island.evaluations));
                 let report = island.optimizer.step(StepContext {
                     problem: objective,
                     rng: &mut step_rng(o.seed, generation.wrapping_mul(stride).wrapping_add(i)),
                     first_stream: island.evaluations.wrapping_mul(stride).wrapping_add(i),
                     stride,
                     progress: decision.progress,
-                    cutoff: Cutoff {
-                        deadline,
-                        stop: Some(stop),
-                    },
+                    cutoff,
                 });
+                mine.evaluations = mine.evaluations.saturating_add(report.evaluations);
                 match report.cut {
                     Some(c) => {
-                        was_cut = true;
-                        cut.extend(c.evaluated);
+                        mine.cut = true;
+                        mine.points.extend(c.evaluated);
                     }
                     None => {
-                        island.evaluations = island.evaluations.saturating_add(report.evaluations)
+                        island.evaluations = island.evaluations.saturating_add(report.evaluations);
+                        whole.push(k);
                     }
                 }
             }
+            // Should the generation be undone (an island here or on another rank was cut
+            // short; then the cutoff has come here too), the best of each whole step still
+            // counts for the result.
+            if mine.cut || cutoff.reached() {
+                let bests = whole
+                    .iter()
+                    .filter_map(|&k| local[k].optimizer.best().cloned());
+                mine.points.extend(bests);
+            }
             // A generation cut short on any rank is undone on every rank: each island returns
             // to its last whole generation, the points evaluated go to the result.
-            if let Some(points) = self.gather_cut(comm, was_cut, &cut, &mut timings)? {
-                for (island, was) in local.iter_mut().zip(before) {
+            if let Some(all) = self.gather_cut(comm, &mine, &mut timings)? {
+                for (island, (was, evaluations)) in local.iter_mut().zip(before) {
                     island.optimizer = was;
+                    island.evaluations = evaluations;
                 }
-                // The points gathered at rank 0: every island's whole-generation counts stand,
-                // so the cut ones are added to the job's total for the result only.
-                late_count = points.len() as u64;
-                late = points;
+                // At rank 0: the evaluations of the undone generation are added to the job's
+                // total for the result only (the checkpoint keeps whole generations).
+                late_count = all.evaluations;
+                late = all.points;
                 break cut_reason(stop);
             }
             generation = generation.saturating_add(1);
@@ -659,30 +685,28 @@ impl<'r, 'a> IslandJob<'r, 'a> {
         Ok(())
     }
 
-    /// Whether any rank's islands were cut short in this generation (`flag`:
-    /// this rank's were; every rank learns the answer): `Some` with every rank's cut points
-    /// (`mine` here; all of them at rank 0, none elsewhere) when one was, else `None`.
+    /// Whether any rank's islands were cut short in this generation (every rank learns it):
+    /// `Some` with every rank's report summed (at rank 0; empty elsewhere) when one was.
     fn gather_cut(
         &self,
         comm: &dyn Comm,
-        flag: bool,
-        mine: &[Evaluated],
+        mine: &CutReport,
         timings: &mut IslandTimings,
-    ) -> Result<Option<Vec<Evaluated>>> {
+    ) -> Result<Option<CutReport>> {
         let t = Instant::now();
-        let gathered = comm.gather(&encode(&(flag, mine)))?;
-        let mut points = Vec::new();
-        let mut any = false;
+        let gathered = comm.gather(&encode(mine))?;
+        let mut all = CutReport::default();
         if let Some(parts) = gathered {
             for p in &parts {
-                let (f, got): (bool, Vec<Evaluated>) = decode(comm, "cut", p)?;
-                any |= f;
-                points.extend(got);
+                let got: CutReport = decode(comm, "cut", p)?;
+                all.cut |= got.cut;
+                all.evaluations = all.evaluations.saturating_add(got.evaluations);
+                all.points.extend(got.points);
             }
         }
-        let any: bool = decode(comm, "cut decision", &comm.broadcast(&encode(&any))?)?;
+        let any: bool = decode(comm, "cut decision", &comm.broadcast(&encode(&all.cut))?)?;
         timings.sync_s += t.elapsed().as_secs_f64();
-        Ok(any.then_some(points))
+        Ok(any.then_some(all))
     }
 
     /// Every island's status at rank 0, by island index.

@@ -849,12 +849,12 @@ impl<'a> Runner<'a> {
     }
 
     /// The instant the run's time limit is up, for a session started at `start` after
-    /// `elapsed_before` seconds of earlier sessions (`None` without a time limit).
+    /// `elapsed_before` seconds of earlier sessions (`None` without a time limit, or one
+    /// beyond what the clock can represent).
     pub(crate) fn deadline(&self, start: Instant, elapsed_before: f64) -> Option<Instant> {
         let left = self.options.time_limit? - elapsed_before;
         // Limits are checked finite; a century stands for "later than any run".
-        let left = Duration::from_secs_f64(left.clamp(0.0, 3.2e9));
-        Some(start.checked_add(left).unwrap_or(start))
+        start.checked_add(Duration::from_secs_f64(left.clamp(0.0, 3.2e9)))
     }
 
     /// How far the run is, in [0, 1], by its budgets (for schedules).
