@@ -501,7 +501,7 @@ fn a_time_limit_cuts_a_generation_short_and_resume_repeats_it() {
     one_line_error(
         &resume(&cut, &["--evaluations", "600"]),
         &[
-            "time_limit = 0.3",
+            "checkpoint.json: options.time_limit = 0.3:",
             "was spent before any design was evaluated",
         ],
     );

@@ -836,14 +836,17 @@ impl<'a> Runner<'a> {
         }
     }
 
-    /// The error of a run that stopped (`stopped` says why) before it evaluated anything.
+    /// The error of a run that stopped (`stopped` says why) before it evaluated anything: only
+    /// a resumed run can (a run's first design is always evaluated), so a spent time limit is
+    /// the one its checkpoint records, unless the command line replaced it.
     pub(crate) fn nothing_evaluated(&self, stopped: &str) -> Error {
         match self.options.time_limit {
             Some(t) if stopped == TIME_LIMIT_REACHED => Error::invalid(
-                "time_limit",
+                "options.time_limit",
                 t,
                 "was spent before any design was evaluated: give a larger --time-limit (a total over the run)",
-            ),
+            )
+            .in_file(self.checkpoint_path()),
             _ => Error::invalid("budget", 0, "the run stopped before any evaluation"),
         }
     }
