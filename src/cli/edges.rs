@@ -67,7 +67,7 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
     }
     let s = Scenario::load(&file)?;
     let chain = s.space.largest().chain();
-    let body = kinsynth::collision::RobotBody::new(&chain, Vec::new(), &s.planner.self_collision);
+    let body = kinsynth::collision::RobotBody::capsules(&chain, &s.planner.self_collision);
     let scene = std::sync::Arc::new(CollisionScene::new(&s.workspace));
     let lmax = if lmax.is_empty() {
         vec![PI / 40.0, PI / 8.0, PI / 4.0]

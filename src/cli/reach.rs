@@ -247,11 +247,7 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         let checked = match &body {
             Some(b) => &**b,
             None => {
-                built = kinsynth::collision::RobotBody::new(
-                    &chain,
-                    Vec::new(),
-                    &planner.self_collision,
-                );
+                built = kinsynth::collision::RobotBody::capsules(&chain, &planner.self_collision);
                 &built
             }
         };

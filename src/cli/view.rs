@@ -41,8 +41,7 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
                 Some(p) => kinsynth::Design::load(p)?.chain(),
                 None => s.space.largest().chain(),
             };
-            let body =
-                kinsynth::collision::RobotBody::new(&chain, Vec::new(), &s.planner.self_collision);
+            let body = kinsynth::collision::RobotBody::capsules(&chain, &s.planner.self_collision);
             (chain, None, body)
         }
     };

@@ -64,14 +64,14 @@ pub fn chain_body_to_srdf(body: &RobotBody, name: &str, base: &str, tip: &str) -
 /// keys), robot name `name`.
 pub fn design_to_srdf(design: &Design, config: &SelfCollisionConfig, name: &str) -> String {
     let chain = design.chain();
-    let body = RobotBody::new(&chain, Vec::new(), config);
+    let body = RobotBody::capsules(&chain, config);
     body_to_srdf(&body, name)
 }
 
 /// Writes the SRDF of `design` to `path` atomically; the robot is named after the file stem
 /// (as [`crate::export::urdf::write_urdf`] names the URDF).
 pub fn write_srdf(design: &Design, config: &SelfCollisionConfig, path: &Path) -> Result<()> {
-    let body = RobotBody::new(&design.chain(), Vec::new(), config);
+    let body = RobotBody::capsules(&design.chain(), config);
     write_body_srdf(&body, None, path)
 }
 

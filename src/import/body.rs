@@ -885,7 +885,7 @@ pub fn robot_body(
 ) -> Result<ImportedRobot> {
     let cfg = &options.self_collision;
     let capsules = |urdf: UrdfChain, note: Option<String>| {
-        let body = RobotBody::new(&urdf.chain, Vec::new(), cfg);
+        let body = RobotBody::capsules(&urdf.chain, cfg);
         ImportedRobot {
             urdf,
             body,

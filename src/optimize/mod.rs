@@ -125,7 +125,7 @@ impl Cutoff<'_> {
 /// evaluated (in stream order), which the step did not take in.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Cut {
-    /// The points evaluated before the deadline.
+    /// The points evaluated before the cutoff.
     pub evaluated: Vec<Evaluated>,
 }
 

@@ -166,11 +166,7 @@ impl Objective {
     pub fn prepare(&self, x: &[f64]) -> Prepared {
         let design = self.space.decode(x);
         let chain = design.chain();
-        let body = Arc::new(RobotBody::new(
-            &chain,
-            Vec::new(),
-            &self.planner.self_collision,
-        ));
+        let body = Arc::new(RobotBody::capsules(&chain, &self.planner.self_collision));
         Prepared {
             design,
             chain,

@@ -1108,8 +1108,7 @@ impl<'a> Runner<'a> {
         );
         write_atomic(&self.out.join(files::PLOT), svg.as_bytes())?;
         let chain = summary.design.chain();
-        let body =
-            crate::collision::RobotBody::new(&chain, Vec::new(), &summary.planner.self_collision);
+        let body = crate::collision::RobotBody::capsules(&chain, &summary.planner.self_collision);
         let view = crate::export::view::ViewInput {
             title: format!(
                 "{} — {} + {}",

@@ -251,8 +251,7 @@ fn plan(
     (seed, stream): (u64, u64),
     keep_tree: bool,
 ) -> ReachReport {
-    let body =
-        body.unwrap_or_else(|| Arc::new(RobotBody::new(chain, Vec::new(), &config.self_collision)));
+    let body = body.unwrap_or_else(|| Arc::new(RobotBody::capsules(chain, &config.self_collision)));
     let checker = make_checker(config.checker, scene.clone(), config.body);
     let mut scratch = Scratch::with_body(chain, body.clone());
     let mut rng = planner_rng(seed, stream);

@@ -926,8 +926,9 @@ mod tests {
     }
 
     /// `ccd`'s work is capped: a run whose task lies inside an obstacle (so it would spend its
-    /// whole budget) stops once its shape casts reach the cap, within one edge's casts of it,
-    /// and says so; with the real cap the same run spends its iteration budget.
+    /// whole budget) stops once its shape casts reach the cap, soon after (the cap is checked
+    /// before each iteration, whose extensions may check several edges), and says so; with
+    /// the real cap the same run spends its iteration budget.
     #[test]
     fn the_ccd_checkers_work_is_capped() {
         use crate::collision::{make_checker, BodyModel, CheckerKind, CollisionScene};
@@ -960,7 +961,7 @@ mod tests {
         let (capped, spent, _) = run(cap);
         assert!(capped.work_limited);
         assert!(capped.iterations < 300, "{}", capped.iterations);
-        // The check comes before each iteration: at most one iteration's casts beyond the cap.
+        // The check comes before each iteration: a few edges' casts beyond the cap at most.
         let per_edge = casts / edges.max(1);
         assert!(
             spent >= cap && spent < cap + 50 * per_edge.max(1),

@@ -218,7 +218,14 @@ impl RobotBody {
 
     /// The capsule body of `chain` with the default self-collision settings.
     pub fn of_chain(chain: &Chain) -> Self {
-        Self::new(chain, Vec::new(), &SelfCollisionConfig::default())
+        Self::capsules(chain, &SelfCollisionConfig::default())
+    }
+
+    /// The capsule body of `chain` (its links' segments, no solids) with the self-collision
+    /// settings `config`: the body a planner run of a design checks, and the one its SRDF and
+    /// report describe (also an imported arm's body under `--body capsules`).
+    pub fn capsules(chain: &Chain, config: &SelfCollisionConfig) -> Self {
+        Self::new(chain, Vec::new(), config)
     }
 
     /// Number of bodies (segments, then solids).
