@@ -79,7 +79,10 @@ def package_dirs_of(argv):
     it = iter(argv)
     for a in it:
         if a == "--package-dir":
-            dirs.append(next(it))
+            d = next(it, None)
+            if d is None:
+                sys.exit("fcl_check.py: --package-dir needs a directory")
+            dirs.append(d)
         else:
             rest.append(a)
     return rest, dirs
@@ -87,6 +90,9 @@ def package_dirs_of(argv):
 
 def main():
     args, package_dirs = package_dirs_of(sys.argv[1:])
+    if len(args) not in (4, 5):
+        usage = __doc__[__doc__.index("usage:") :].split("\n\n")[0]
+        sys.exit(f"fcl_check.py: expected 4 or 5 arguments, got {len(args)}\n{usage}")
     urdf, srdf, scenario_path, reach_path = args[:4]
     samples = int(args[4]) if len(args) > 4 else 400
     with open(scenario_path, "rb") as f:
