@@ -457,6 +457,40 @@ fn edges_refuses_counts_and_steps_it_cannot_run() {
     }
 }
 
+/// `edges` prints any accepted `L_max` in its column: four decimals, or in exponent form where
+/// those would not fit (`--lmax 1e300` printed 301 digits).
+#[test]
+fn edges_prints_any_step_bound_in_its_column() {
+    let s = repo("examples/scenarios/paper-2d.toml");
+    let out = Command::new(BIN)
+        .arg("edges")
+        .arg(&s)
+        .args([
+            "--count",
+            "10",
+            "--substeps",
+            "20",
+            "--lmax",
+            "1e300,0.5,0.00002",
+        ])
+        .stdin(Stdio::null())
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    let rows: Vec<&str> = text.lines().skip(2).collect();
+    assert_eq!(rows.len(), 12, "{text}");
+    let want = ["1.00e300", "0.5000", "2.00e-5"].map(|w| [w; 4]).concat();
+    for (row, want) in rows.iter().zip(want) {
+        assert_eq!(row.split_whitespace().next(), Some(want), "{text}");
+        assert!(row.len() < 80, "{row}");
+    }
+}
+
 /// An arm buried in an obstacle has no collision-free start: `edges` says so in one line after
 /// a bounded search (an arm of 31,626 self pairs searched for minutes), instead of printing a
 /// table of nothing.

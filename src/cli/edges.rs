@@ -108,8 +108,8 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         }
         if edges.len() < count {
             say!(
-                "{:>8.4} only {} of {count} edges: collision-free starts are rare",
-                l,
+                "{:>8} only {} of {count} edges: collision-free starts are rare",
+                label(l),
                 edges.len()
             );
         }
@@ -121,8 +121,8 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
             let checker = make_checker(kind, scene.clone(), s.planner.body);
             let r = oracle::agreement(checker.as_ref(), &chain, &body, &edges, &verdicts);
             say!(
-                "{:>8.4} {:>10} {:>8} {:>5} ({:>4.1}%) {:>6} ({:>4.1}%) {:>9.2} {:>8.1}",
-                l,
+                "{:>8} {:>10} {:>8} {:>5} ({:>4.1}%) {:>6} ({:>4.1}%) {:>9.2} {:>8.1}",
+                label(l),
                 r.checker,
                 r.blocked,
                 r.false_free,
@@ -135,4 +135,14 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         }
     }
     Ok(())
+}
+
+/// `L_max` for the table's first column: four decimals, or in exponent form where those would
+/// not fit the column (below 0.001 or from 10,000 on).
+fn label(l: f64) -> String {
+    if (1e-3..1e4).contains(&l) {
+        format!("{l:.4}")
+    } else {
+        format!("{l:.2e}")
+    }
 }
