@@ -177,6 +177,7 @@ fn a_step_past_its_deadline_is_cut_with_the_points_it_evaluated() {
     let past = Cutoff {
         deadline: Some(std::time::Instant::now()),
         stop: None,
+        budget: None,
     };
     for (name, make) in makers {
         let mut opt = make();
@@ -197,6 +198,66 @@ fn a_step_past_its_deadline_is_cut_with_the_points_it_evaluated() {
             assert!(r.cut.is_none(), "{name}");
             // The cut step's first point is the whole step's first point.
             assert!(r.evaluations >= cut.evaluated.len() as u64, "{name}");
+        }
+    }
+}
+
+/// A step given fewer evaluations than it needs (what is left of a run's evaluation budget)
+/// is cut after exactly that many, the first points of the step in order, on every run; none
+/// left cuts it before any; enough left leaves it whole.
+#[test]
+fn a_step_past_its_evaluation_budget_is_cut_at_it() {
+    let problem = Sphere::new(3);
+    let asa = || -> Box<dyn Optimizer> {
+        Box::new(Asa::new(
+            AsaParams {
+                reanneal_interval: 1,
+                ..AsaParams::default()
+            },
+            vec![],
+        ))
+    };
+    type Make = fn() -> Box<dyn Optimizer>;
+    let makers: [(&str, Make); 3] = [("ga", ga), ("pso", pso), ("asa", asa)];
+    let step = |opt: &mut dyn Optimizer, generation: u64, budget: Option<u64>| {
+        let mut rng = ChaCha8Rng::seed_from_u64(9);
+        rng.set_stream(generation);
+        opt.step(StepContext {
+            problem: &problem,
+            rng: &mut rng,
+            first_stream: 100 * generation,
+            stride: 1,
+            progress: 0.0,
+            cutoff: Cutoff {
+                budget,
+                ..Cutoff::default()
+            },
+        })
+    };
+    for (name, make) in makers {
+        let mut opt = make();
+        for generation in 0..4u64 {
+            let before = opt.snapshot();
+            let whole = step(before.snapshot().as_mut(), generation, None);
+            assert!(whole.cut.is_none(), "{name}");
+            let need = whole.evaluations;
+            assert!(need >= 2, "{name}: a step of {need} evaluations");
+            for budget in [0, 1, need - 1] {
+                let r = step(before.snapshot().as_mut(), generation, Some(budget));
+                let cut = r
+                    .cut
+                    .unwrap_or_else(|| panic!("{name}: step {generation} not cut at {budget}"));
+                assert_eq!(r.evaluations, budget, "{name}");
+                assert_eq!(cut.evaluated.len() as u64, budget, "{name}");
+                let again = step(before.snapshot().as_mut(), generation, Some(budget));
+                assert_eq!(again.cut, Some(cut.clone()), "{name}: not the same points");
+                let streams: Vec<u64> = cut.evaluated.iter().map(|e| e.stream).collect();
+                let first: Vec<u64> = (0..budget).map(|k| 100 * generation + k).collect();
+                assert_eq!(streams, first, "{name}: not the step's first points");
+            }
+            let r = step(opt.as_mut(), generation, Some(need));
+            assert!(r.cut.is_none(), "{name}: cut with all it needs");
+            assert_eq!(r.evaluations, need, "{name}");
         }
     }
 }

@@ -50,10 +50,11 @@ pub struct Args {
     /// --evaluations is given (either replaces both of the scenario's).
     #[arg(long)]
     pub time_limit: Option<f64>,
-    /// Budget in objective evaluations, over the whole run (with --resume: a new total).
-    /// Default: the scenario's budgets, when neither --time-limit nor --evaluations is given
-    /// (either replaces both of the scenario's: `--evaluations N` alone runs N evaluations
-    /// however long they take, so the result depends on the seed only).
+    /// Budget in objective evaluations, over the whole run (with --resume: a new total): the
+    /// run makes exactly this many (fewer if it converges first), cutting its last generation
+    /// short where needed. Default: the scenario's budgets, when neither --time-limit nor
+    /// --evaluations is given (either replaces both of the scenario's: `--evaluations N` alone
+    /// runs N evaluations however long they take, so the result depends on the seed only).
     #[arg(long)]
     pub evaluations: Option<f64>,
     /// Seconds between checkpoints. Default: the scenario's.

@@ -280,19 +280,31 @@ struct Decision {
     checkpoint: bool,
     /// Progress of the job for the next generation (schedules).
     progress: f64,
+    /// Evaluations left of the job's budget (`None`: no evaluation budget), shared among the
+    /// islands in index order ([`budget_share`]).
+    left: Option<u64>,
 }
 
-/// An island held by this process.
 /// What a rank's islands did in a generation, for the decision to undo it: whether one was
-/// cut short, the evaluations made, and the points that count for the result if it is undone
-/// (the cut steps' evaluations, the best of each whole step made after the cutoff).
+/// cut short (and whether by its share of the evaluation budget), the evaluations made, and
+/// the points that count for the result if it is undone (the cut steps' evaluations, the best
+/// of each whole step made in it).
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 struct CutReport {
     cut: bool,
+    by_budget: bool,
     evaluations: u64,
     points: Vec<Evaluated>,
 }
 
+/// Island `island`'s share of `left` evaluations among `islands`: an equal part, the
+/// remainder one each to the first islands, so that the shares add up to `left`.
+fn budget_share(left: u64, islands: usize, island: usize) -> u64 {
+    let n = islands.max(1) as u64;
+    left / n + u64::from((island as u64) < left % n)
+}
+
+/// An island held by this process.
 struct Island {
     index: usize,
     optimizer: Box<dyn Optimizer>,
@@ -385,6 +397,7 @@ impl<'r, 'a> IslandJob<'r, 'a> {
                         && last_checkpoint.elapsed().as_secs_f64() >= o.checkpoint_interval,
                     stop: stop_now,
                     progress: runner.progress(total, elapsed()),
+                    left: o.evaluations.map(|n| n.saturating_sub(total)),
                 }
             } else {
                 Decision::default()
@@ -420,10 +433,16 @@ impl<'r, 'a> IslandJob<'r, 'a> {
             let cutoff = Cutoff {
                 deadline,
                 stop: Some(stop),
+                budget: None,
             };
             let mut whole = Vec::new();
             for (k, island) in local.iter_mut().enumerate() {
                 let i = island.index as u64;
+                let share = decision.left.map(|l| budget_share(l, n, island.index));
+                let cutoff = Cutoff {
+                    budget: share,
+                    ..cutoff
+                };
                 before.push((island.optimizer.snapshot(), island.evaluations));
                 let report = island.optimizer.step(StepContext {
                     problem: objective,
@@ -437,6 +456,7 @@ impl<'r, 'a> IslandJob<'r, 'a> {
                 match report.cut {
                     Some(c) => {
                         mine.cut = true;
+                        mine.by_budget |= share.is_some_and(|b| report.evaluations >= b);
                         mine.points.extend(c.evaluated);
                     }
                     None => {
@@ -446,9 +466,9 @@ impl<'r, 'a> IslandJob<'r, 'a> {
                 }
             }
             // Should the generation be undone (an island here or on another rank was cut
-            // short; then the cutoff has come here too), the best of each whole step still
-            // counts for the result.
-            if mine.cut || cutoff.reached() {
+            // short: then the cutoff has come here too, or a share of the evaluation budget
+            // ran out somewhere), the best of each whole step still counts for the result.
+            if mine.cut || cutoff.reached() || decision.left.is_some() {
                 let bests = whole
                     .iter()
                     .filter_map(|&k| local[k].optimizer.best().cloned());
@@ -465,7 +485,7 @@ impl<'r, 'a> IslandJob<'r, 'a> {
                 // total for the result only (the checkpoint keeps whole generations).
                 late_count = all.evaluations;
                 late = all.points;
-                break cut_reason(stop);
+                break cut_reason(stop, all.by_budget);
             }
             generation = generation.saturating_add(1);
             timings.generations += 1;
@@ -700,11 +720,17 @@ impl<'r, 'a> IslandJob<'r, 'a> {
             for p in &parts {
                 let got: CutReport = decode(comm, "cut", p)?;
                 all.cut |= got.cut;
+                all.by_budget |= got.by_budget;
                 all.evaluations = all.evaluations.saturating_add(got.evaluations);
                 all.points.extend(got.points);
             }
         }
-        let any: bool = decode(comm, "cut decision", &comm.broadcast(&encode(&all.cut))?)?;
+        let (any, by_budget): (bool, bool) = decode(
+            comm,
+            "cut decision",
+            &comm.broadcast(&encode(&(all.cut, all.by_budget)))?,
+        )?;
+        all.by_budget = by_budget;
         timings.sync_s += t.elapsed().as_secs_f64();
         Ok(any.then_some(all))
     }

@@ -66,8 +66,10 @@ impl Evaluated {
 ///
 /// A point whose evaluation has not begun when the `cutoff` is reached (the time is up, or the
 /// run is told to stop) is skipped; the first point is always evaluated, so that every step
-/// evaluates something. The batch is then [`Cut`], with the points that were evaluated, and the
-/// step that asked for it leaves its result to the caller (see [`Optimizer::step`]).
+/// evaluates something. Points past the cutoff's evaluation budget are skipped too (by their
+/// place in the batch, so which ones does not depend on timing). The batch is then [`Cut`],
+/// with the points that were evaluated, and the step that asked for it leaves its result to
+/// the caller (see [`Optimizer::step`]).
 pub fn evaluate_batch(
     problem: &dyn Problem,
     xs: Vec<Vec<f64>>,
@@ -81,7 +83,7 @@ pub fn evaluate_batch(
         .into_par_iter()
         .enumerate()
         .filter_map(|(i, x)| {
-            if i > 0 && cutoff.reached() {
+            if cutoff.budget.is_some_and(|b| i as u64 >= b) || (i > 0 && cutoff.reached()) {
                 return None;
             }
             let stream = first_stream.wrapping_add((i as u64).wrapping_mul(stride));
@@ -102,14 +104,19 @@ pub fn evaluate_batch(
     }
 }
 
-/// When a step's evaluations stop being begun: at a deadline (the run's time limit) or when a
-/// flag is raised (Ctrl-C). The default never comes.
+/// When a step's evaluations stop being begun: at a deadline (the run's time limit), when a
+/// flag is raised (Ctrl-C), or after a number of evaluations (what is left of the run's
+/// evaluation budget). The default never comes.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Cutoff<'a> {
     /// The instant the run's time is up.
     pub deadline: Option<Instant>,
     /// Raised to stop the run.
     pub stop: Option<&'a AtomicBool>,
+    /// How many evaluations the step may still make (`None`: no limit). Unlike the deadline
+    /// it is counted by the points' places in the step, so a cut by it is the same on every
+    /// run.
+    pub budget: Option<u64>,
 }
 
 impl Cutoff<'_> {
@@ -174,8 +181,8 @@ pub struct StepContext<'a> {
     pub stride: u64,
     /// Progress ∈ [0, 1].
     pub progress: f64,
-    /// When the step's evaluations stop being begun (the run's time limit, Ctrl-C): the step
-    /// is then cut ([`evaluate_batch`]).
+    /// When the step's evaluations stop being begun (the run's time limit, Ctrl-C, the rest of
+    /// its evaluation budget): the step is then cut ([`evaluate_batch`]).
     pub cutoff: Cutoff<'a>,
 }
 
@@ -204,12 +211,17 @@ pub struct Batch<'a> {
 }
 
 impl<'a> Batch<'a> {
-    /// The same numbering `count` evaluations on (for a second batch within a step).
+    /// The same numbering `count` evaluations on (for a second batch within a step), with
+    /// `count` fewer left of the evaluation budget.
     pub fn after(self, count: u64) -> Batch<'a> {
         Batch {
             first_stream: self
                 .first_stream
                 .wrapping_add(count.wrapping_mul(self.stride)),
+            cutoff: Cutoff {
+                budget: self.cutoff.budget.map(|b| b.saturating_sub(count)),
+                ..self.cutoff
+            },
             ..self
         }
     }

@@ -485,10 +485,16 @@ pub(crate) struct Conclusion<'a> {
 /// Why a run stopped when its time limit was reached (between generations or within one).
 pub(crate) const TIME_LIMIT_REACHED: &str = "time limit reached";
 
-/// Why a step was cut short: Ctrl-C, else the time limit.
-pub(crate) fn cut_reason(stop: &AtomicBool) -> String {
+/// Why a run stops when its evaluation budget is spent.
+pub(crate) const EVALUATION_BUDGET_SPENT: &str = "evaluation budget spent";
+
+/// Why a step was cut short: Ctrl-C, else the evaluation budget when it ran out (`by_budget`),
+/// else the time limit.
+pub(crate) fn cut_reason(stop: &AtomicBool, by_budget: bool) -> String {
     if stop.load(Ordering::SeqCst) {
         "interrupted".to_string()
+    } else if by_budget {
+        EVALUATION_BUDGET_SPENT.to_string()
     } else {
         TIME_LIMIT_REACHED.to_string()
     }
@@ -655,6 +661,7 @@ impl<'a> Runner<'a> {
                 break why;
             }
             let before = optimizer.snapshot();
+            let left = o.evaluations.map(|n| n.saturating_sub(evaluations));
             let report = optimizer.step(StepContext {
                 problem: objective,
                 rng: &mut step_rng(o.seed, generation),
@@ -664,14 +671,16 @@ impl<'a> Runner<'a> {
                 cutoff: Cutoff {
                     deadline,
                     stop: Some(stop),
+                    budget: left,
                 },
             });
             if let Some(cut) = report.cut {
                 // The state stays that of the last whole generation (which a resume repeats
                 // from, with the same streams); the points evaluated still count for the result.
                 optimizer = before;
+                let by_budget = left.is_some_and(|l| report.evaluations >= l);
                 late = cut.evaluated;
-                break cut_reason(stop);
+                break cut_reason(stop, by_budget);
             }
             evaluations = evaluations.saturating_add(report.evaluations);
             generation = generation.saturating_add(1);
@@ -823,7 +832,7 @@ impl<'a> Runner<'a> {
             return Some("interrupted".to_string());
         }
         if o.evaluations.is_some_and(|n| evaluations >= n) {
-            return Some("evaluation budget spent".to_string());
+            return Some(EVALUATION_BUDGET_SPENT.to_string());
         }
         if o.time_limit.is_some_and(|t| elapsed >= t) {
             return Some(TIME_LIMIT_REACHED.to_string());
