@@ -360,7 +360,7 @@ pub fn report(out: &std::path::Path, summary: &kinsynth::optimize::RunSummary) {
         },
     );
     say!(
-        "{}: {} + {} (L_max {:.4}), seed {}: R = {:.3} ({robust}), cost {:.4}, {} links and {} joints kept, total length {:.3} m; {} evaluations in {:.1} s ({})",
+        "{}: {} + {} (L_max {:.4}), seed {}: R = {:.3} ({robust}), cost {:.4}, {} links and {} joints kept, total length {:.3} m; {} evaluation{} in {:.1} s ({})",
         out.display(),
         summary.optimizer,
         summary.checker,
@@ -372,6 +372,7 @@ pub fn report(out: &std::path::Path, summary: &kinsynth::optimize::RunSummary) {
         summary.joints_kept,
         summary.design.total_length(),
         summary.evaluations,
+        if summary.evaluations == 1 { "" } else { "s" },
         summary.elapsed_s,
         summary.stopped
     );

@@ -387,10 +387,15 @@ impl<'r, 'a> IslandJob<'r, 'a> {
         let mut statuses = self.gather_status(comm, &local, &mut timings)?;
         let mut best_cost = global_best(statuses.as_deref()).map_or(f64::INFINITY, |b| b.1.cost);
         let stride = n as u64;
+        // A new job's first generation is always taken, whatever its time limit: every island
+        // evaluates at least its first design.
+        let mut first = resume.is_none();
         let stopped = loop {
+            let clock = (!first).then(elapsed);
+            first = false;
             let decision = if root {
                 let best = global_best(statuses.as_deref()).map(|b| b.1);
-                let stop_now = runner.stop_reason(stop, total, elapsed(), best, stale);
+                let stop_now = runner.stop_reason(stop, total, clock, best, stale);
                 Decision {
                     checkpoint: stop_now.is_none()
                         && generation > first_generation

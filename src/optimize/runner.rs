@@ -616,6 +616,9 @@ impl<'a> Runner<'a> {
         let setup = self.prepare(resume.as_ref())?;
         let objective = &setup.objective;
         let o = &self.options;
+        // A new run's first step is always taken, whatever its time limit: it evaluates at
+        // least its first design ([`evaluate_batch`]).
+        let mut first = resume.is_none();
         let (
             mut optimizer,
             mut generation,
@@ -655,9 +658,9 @@ impl<'a> Runner<'a> {
         // The points of a generation cut short (time limit, Ctrl-C): offered to the result only.
         let mut late: Vec<Evaluated> = Vec::new();
         let stopped = loop {
-            if let Some(why) =
-                self.stop_reason(stop, evaluations, elapsed(), optimizer.best(), stale)
-            {
+            let clock = (!first).then(elapsed);
+            first = false;
+            if let Some(why) = self.stop_reason(stop, evaluations, clock, optimizer.best(), stale) {
                 break why;
             }
             let before = optimizer.snapshot();
@@ -818,12 +821,13 @@ impl<'a> Runner<'a> {
     }
 
     /// Why the run stops before its next generation, if it does: Ctrl-C, a budget spent, or
-    /// convergence (`R = 1` and no improvement for `patience` generations).
+    /// convergence (`R = 1` and no improvement for `patience` generations). The time limit is
+    /// checked against `elapsed` when it is given.
     pub(crate) fn stop_reason(
         &self,
         stop: &AtomicBool,
         evaluations: u64,
-        elapsed: f64,
+        elapsed: Option<f64>,
         best: Option<&Evaluated>,
         stale: usize,
     ) -> Option<String> {
@@ -834,7 +838,7 @@ impl<'a> Runner<'a> {
         if o.evaluations.is_some_and(|n| evaluations >= n) {
             return Some(EVALUATION_BUDGET_SPENT.to_string());
         }
-        if o.time_limit.is_some_and(|t| elapsed >= t) {
+        if o.time_limit.zip(elapsed).is_some_and(|(t, e)| e >= t) {
             return Some(TIME_LIMIT_REACHED.to_string());
         }
         match best {
