@@ -4,7 +4,7 @@
 //! resumes to the uninterrupted result.
 
 use kinsynth::optimize::islands::{Comm, IslandJob, IslandRow, Migration, SingleProcess};
-use kinsynth::optimize::runner::{HistoryRow, Observer, Quiet, RunOptions, Runner};
+use kinsynth::optimize::runner::{Checkpoint, HistoryRow, Observer, Quiet, RunOptions, Runner};
 use kinsynth::optimize::RunSummary;
 use kinsynth::scenario::Algorithm;
 use kinsynth::Scenario;
@@ -59,6 +59,18 @@ fn island_rows(dir: &Path) -> Vec<Vec<String>> {
     lines
         .map(|l| l.split(',').map(str::to_string).collect())
         .collect()
+}
+
+/// Resumes the island job of `n` islands of `runner` from `checkpoint`, in one process.
+fn resume_islands(runner: &Runner<'_>, n: usize, migration: Migration, checkpoint: Checkpoint) {
+    IslandJob::new(runner, n, migration)
+        .run(
+            &SingleProcess,
+            Some(checkpoint),
+            &AtomicBool::new(false),
+            &mut Quiet,
+        )
+        .unwrap();
 }
 
 /// Runs an island job of `n` islands in one process.
@@ -388,14 +400,7 @@ fn an_evaluation_budget_cuts_an_island_generation_at_it_on_every_rank() {
         &one,
     );
     let checkpoint = Runner::read_checkpoint(&one).unwrap();
-    IslandJob::new(&runner, 4, migration)
-        .run(
-            &SingleProcess,
-            Some(checkpoint),
-            &AtomicBool::new(false),
-            &mut Quiet,
-        )
-        .unwrap();
+    resume_islands(&runner, 4, migration, checkpoint);
     assert_eq!(best_json(&one), best_json(&whole));
 }
 
@@ -538,14 +543,7 @@ fn a_stopped_job_resumes_to_the_uninterrupted_result_and_refuses_another_number_
         );
     }
 
-    IslandJob::new(&runner, 2, migration)
-        .run(
-            &SingleProcess,
-            Some(checkpoint),
-            &AtomicBool::new(false),
-            &mut Quiet,
-        )
-        .unwrap();
+    resume_islands(&runner, 2, migration, checkpoint);
     assert_eq!(best_json(&stopped), best_json(&whole));
     assert_eq!(island_rows(&stopped), island_rows(&whole));
 }

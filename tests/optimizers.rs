@@ -141,14 +141,12 @@ fn design_optimisation_is_the_same_on_one_thread_and_on_two() {
     assert!(one.cost.is_finite());
 }
 
-/// A step whose deadline has passed evaluates its first point only and reports the step cut,
-/// with that point; the snapshot taken before it is the state to go on from. Each optimiser,
-/// at its first step and at a later one (ASA's later steps include its re-annealing probes).
-#[test]
-fn a_step_past_its_deadline_is_cut_with_the_points_it_evaluated() {
-    let problem = Sphere::new(4);
-    type Make = fn() -> Box<dyn Optimizer>;
-    let makers: [(&str, Make); 3] = [
+type Make = fn() -> Box<dyn Optimizer>;
+
+/// The three optimisers, ASA re-annealing at every step (so that its later steps include
+/// its probes, a second batch).
+fn cut_makers() -> [(&'static str, Make); 3] {
+    [
         ("ga", ga),
         ("pso", pso),
         ("asa", || {
@@ -160,19 +158,38 @@ fn a_step_past_its_deadline_is_cut_with_the_points_it_evaluated() {
                 vec![],
             ))
         }),
-    ];
-    // Step `generation` of `opt`, with `cutoff`.
+    ]
+}
+
+/// Step `generation` of `opt` on `problem`, with `cutoff` (evaluation `j` on stream
+/// `100·generation + j`).
+fn step_of(
+    problem: &dyn Problem,
+    opt: &mut dyn Optimizer,
+    generation: u64,
+    cutoff: Cutoff<'_>,
+) -> kinsynth::optimize::StepReport {
+    let mut rng = ChaCha8Rng::seed_from_u64(9);
+    rng.set_stream(generation);
+    opt.step(StepContext {
+        problem,
+        rng: &mut rng,
+        first_stream: 100 * generation,
+        stride: 1,
+        progress: 0.0,
+        cutoff,
+    })
+}
+
+/// A step whose deadline has passed evaluates its first point only and reports the step cut,
+/// with that point; the snapshot taken before it is the state to go on from. Each optimiser,
+/// at its first step and at a later one (ASA's later steps include its re-annealing probes).
+#[test]
+fn a_step_past_its_deadline_is_cut_with_the_points_it_evaluated() {
+    let problem = Sphere::new(4);
+    let makers = cut_makers();
     let step = |opt: &mut dyn Optimizer, generation: u64, cutoff: Cutoff<'_>| {
-        let mut rng = ChaCha8Rng::seed_from_u64(9);
-        rng.set_stream(generation);
-        opt.step(StepContext {
-            problem: &problem,
-            rng: &mut rng,
-            first_stream: 100 * generation,
-            stride: 1,
-            progress: 0.0,
-            cutoff,
-        })
+        step_of(&problem, opt, generation, cutoff)
     };
     let past = Cutoff {
         deadline: Some(std::time::Instant::now()),
@@ -208,31 +225,13 @@ fn a_step_past_its_deadline_is_cut_with_the_points_it_evaluated() {
 #[test]
 fn a_step_past_its_evaluation_budget_is_cut_at_it() {
     let problem = Sphere::new(3);
-    let asa = || -> Box<dyn Optimizer> {
-        Box::new(Asa::new(
-            AsaParams {
-                reanneal_interval: 1,
-                ..AsaParams::default()
-            },
-            vec![],
-        ))
-    };
-    type Make = fn() -> Box<dyn Optimizer>;
-    let makers: [(&str, Make); 3] = [("ga", ga), ("pso", pso), ("asa", asa)];
+    let makers = cut_makers();
     let step = |opt: &mut dyn Optimizer, generation: u64, budget: Option<u64>| {
-        let mut rng = ChaCha8Rng::seed_from_u64(9);
-        rng.set_stream(generation);
-        opt.step(StepContext {
-            problem: &problem,
-            rng: &mut rng,
-            first_stream: 100 * generation,
-            stride: 1,
-            progress: 0.0,
-            cutoff: Cutoff {
-                budget,
-                ..Cutoff::default()
-            },
-        })
+        let cutoff = Cutoff {
+            budget,
+            ..Cutoff::default()
+        };
+        step_of(&problem, opt, generation, cutoff)
     };
     for (name, make) in makers {
         let mut opt = make();
