@@ -409,6 +409,39 @@ fn bad_budgets_are_refused_naming_the_flag_and_the_value() {
     one_line_error(&o, &["--lmax = -0.5"]);
 }
 
+/// An experiment's evaluation budget is exact for each of its runs, and its summary line says
+/// both budgets: one workspace of paper-2d with 8 evaluations per method makes 8 in every run.
+#[test]
+fn an_experiment_run_makes_exactly_its_evaluation_budget() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x");
+    let o = Command::new(BIN)
+        .args([
+            "experiment",
+            "paper-2d",
+            "--runs",
+            "1",
+            "--evaluations",
+            "8",
+        ])
+        .args(["--time-limit", "30", "--seed", "3", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    ok(&o);
+    let said = stdout(&o);
+    assert!(
+        said.contains("6 runs of at most 30 s or 8 evaluations"),
+        "{said}"
+    );
+    let runs = std::fs::read_to_string(out.join("runs.csv")).unwrap();
+    let mut lines = runs.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let at = header.iter().position(|h| *h == "evaluations").unwrap();
+    let counts: Vec<&str> = lines.map(|l| l.split(',').nth(at).unwrap()).collect();
+    assert_eq!(counts, ["8"; 6], "{runs}");
+}
+
 #[test]
 fn resume_with_a_larger_budget_extends_the_run_to_the_uninterrupted_result() {
     let dir = tempfile::tempdir().unwrap();

@@ -65,8 +65,11 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
     };
     spec.validate()?;
     let records = run_experiment(&spec, shard, &out, &mut |line| eprintln!("{line}"))?;
+    let cap = spec
+        .evaluations
+        .map_or(String::new(), |n| format!(" or {n} evaluations"));
     say!(
-        "{} runs of {} s (workspaces {:?} of {}, shard {shard}) written to {}",
+        "{} runs of at most {} s{cap} (workspaces {:?} of {}, shard {shard}) written to {}",
         records.len(),
         time_limit,
         shard.workspaces(runs),
