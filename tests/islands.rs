@@ -404,6 +404,26 @@ fn an_evaluation_budget_cuts_an_island_generation_at_it_on_every_rank() {
     assert_eq!(best_json(&one), best_json(&whole));
 }
 
+/// A new island job takes its first generation whatever its time limit: with a limit of 0,
+/// each of the 8 islands (over 2 ranks) evaluates its first design and no other, and the job
+/// reports the best of those.
+#[test]
+fn a_new_island_job_evaluates_each_islands_first_design_under_a_spent_time_limit() {
+    let dir = tempfile::tempdir().unwrap();
+    let scenario = small_scenario(dir.path());
+    let out = dir.path().join("zero");
+    let o = RunOptions {
+        time_limit: Some(0.0),
+        evaluations: None,
+        ..options(Algorithm::Ga, 0)
+    };
+    let summary = islands_on_ranks(&scenario, &out, 8, 2, o);
+    assert_eq!(summary.stopped, "time limit reached");
+    assert_eq!(summary.evaluations, 8);
+    assert!(summary.cost.is_finite());
+    assert_eq!(best_json(&out)["evaluations"], 8);
+}
+
 #[test]
 fn the_result_does_not_depend_on_how_islands_are_spread_over_ranks() {
     let dir = tempfile::tempdir().unwrap();

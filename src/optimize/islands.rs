@@ -402,7 +402,7 @@ impl<'r, 'a> IslandJob<'r, 'a> {
                         && last_checkpoint.elapsed().as_secs_f64() >= o.checkpoint_interval,
                     stop: stop_now,
                     progress: runner.progress(total, elapsed()),
-                    left: o.evaluations.map(|n| n.saturating_sub(total)),
+                    left: runner.evaluations_left(total),
                 }
             } else {
                 Decision::default()

@@ -664,7 +664,7 @@ impl<'a> Runner<'a> {
                 break why;
             }
             let before = optimizer.snapshot();
-            let left = o.evaluations.map(|n| n.saturating_sub(evaluations));
+            let left = self.evaluations_left(evaluations);
             let report = optimizer.step(StepContext {
                 problem: objective,
                 rng: &mut step_rng(o.seed, generation),
@@ -847,6 +847,11 @@ impl<'a> Runner<'a> {
             )),
             _ => None,
         }
+    }
+
+    /// What is left of the evaluation budget after `done` evaluations (`None`: no budget).
+    pub(crate) fn evaluations_left(&self, done: u64) -> Option<u64> {
+        self.options.evaluations.map(|n| n.saturating_sub(done))
     }
 
     /// The error of a run that stopped (`stopped` says why) before it evaluated anything: only
