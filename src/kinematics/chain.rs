@@ -207,25 +207,44 @@ pub fn step_length(fa: &Frames, fb: &Frames, a: &[f64], b: &[f64], lambda: f64) 
 /// columns change.
 #[inline(always)]
 fn rotate_local(r: &mut Matrix3<f64>, axis: Axis, s: f64, c: f64) {
-    // Column-major storage: column `k` is `m[3k .. 3k + 3]`.
+    // Columns `I` and `J` (compile-time indices into the column-major storage, so that the
+    // matrix can live in registers): col_I' = c·col_I + s·col_J, col_J' = −s·col_I + c·col_J.
     #[inline(always)]
-    fn mix(m: &mut [f64], i: usize, j: usize, s: f64, c: f64) {
-        let ci = [m[3 * i], m[3 * i + 1], m[3 * i + 2]];
-        let cj = [m[3 * j], m[3 * j + 1], m[3 * j + 2]];
-        for row in 0..3 {
-            m[3 * i + row] = c * ci[row] + s * cj[row];
-            m[3 * j + row] = -s * ci[row] + c * cj[row];
-        }
+    fn mix<const I: usize, const J: usize>(m: &mut [[f64; 3]; 3], s: f64, c: f64) {
+        let (ci, cj) = (m[I], m[J]);
+        m[I] = [
+            c * ci[0] + s * cj[0],
+            c * ci[1] + s * cj[1],
+            c * ci[2] + s * cj[2],
+        ];
+        m[J] = [
+            -s * ci[0] + c * cj[0],
+            -s * ci[1] + c * cj[1],
+            -s * ci[2] + c * cj[2],
+        ];
     }
-    let m = r.as_mut_slice();
+    let m = &mut r.data.0;
     match axis {
         // R·Rx: col1' = c·col1 + s·col2, col2' = −s·col1 + c·col2
-        Axis::Rx => mix(m, 1, 2, s, c),
+        Axis::Rx => mix::<1, 2>(m, s, c),
         // R·Ry: col0' = c·col0 − s·col2, col2' = s·col0 + c·col2
-        Axis::Ry => mix(m, 2, 0, s, c),
+        Axis::Ry => mix::<2, 0>(m, s, c),
         // R·Rz: col0' = c·col0 + s·col1, col1' = −s·col0 + c·col1
-        Axis::Rz => mix(m, 0, 1, s, c),
+        Axis::Rz => mix::<0, 1>(m, s, c),
         _ => unreachable!("translation axis in rotate_local"),
+    }
+}
+
+/// Column `k` of `r`, selected among three compile-time indices (a runtime index into the
+/// matrix's storage would keep it in memory, where the stores of [`rotate_local`] and the wider
+/// loads of a copy of the whole matrix stall).
+#[inline(always)]
+fn column(r: &Matrix3<f64>, k: usize) -> Vector3<f64> {
+    let m = &r.data.0;
+    match k {
+        0 => Vector3::from(m[0]),
+        1 => Vector3::from(m[1]),
+        _ => Vector3::from(m[2]),
     }
 }
 
@@ -683,14 +702,14 @@ impl Chain {
                     }
                     Op::TransConst { axis, v } => {
                         let from = Point3::from(pos);
-                        pos += rot.column(axis.index() - 3) * v;
+                        pos += column(&rot, axis.index() - 3) * v;
                         if !self.bare {
                             out.segments[seg] = [from, Point3::from(pos)];
                             seg += 1;
                         }
                     }
                     Op::TransFree { axis, k, lo, hi } => {
-                        let dir = rot.column(axis.index() - 3).into_owned();
+                        let dir = column(&rot, axis.index() - 3);
                         pos += dir * a[k];
                         if !self.bare {
                             out.segments[seg] =
