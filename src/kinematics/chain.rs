@@ -2,7 +2,7 @@
 
 use super::axis::{Axis, Range};
 use super::link::Link;
-use super::trig::sincos_many;
+use super::trig::sincos_at;
 use nalgebra::{IsometryMatrix3, Matrix3, Point3, Rotation3, Vector3};
 use rand::RngExt;
 
@@ -688,11 +688,7 @@ impl Chain {
                     Op::RotFree { axis, k, r } => {
                         if r % TRIG == 0 {
                             let block = &rotations[r..rotations.len().min(r + TRIG)];
-                            let mut x = [0.0; TRIG];
-                            for (xi, &j) in x.iter_mut().zip(block) {
-                                *xi = a[j];
-                            }
-                            sincos_many(&x, &mut trig[..block.len()]);
+                            sincos_at(a, block, &mut trig[..block.len()]);
                         }
                         let (s, c) = trig[r % TRIG];
                         rotate_local(&mut rot, axis, s, c);

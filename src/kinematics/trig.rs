@@ -20,30 +20,55 @@
 #[inline]
 pub fn sincos_many(x: &[f64], out: &mut [(f64, f64)]) {
     let x = &x[..out.len()];
+    sincos_by(|k| x[k], out);
+}
+
+/// The sines and cosines of `a[idx[k]]` into `out[k]`, for every `k` below `out.len()` (which
+/// must not exceed `idx.len()`), exactly as `libm::sincos` gives them: [`sincos_many`] of the
+/// angles at the indices `idx` of `a`, each lane read straight from `a` (no copy of the angles
+/// into a buffer first, whose narrow writes a vector read could not take from the store buffer).
+///
+/// # Panics
+/// When `out` is longer than `idx`, or an index is out of `a`.
+#[inline]
+pub fn sincos_at(a: &[f64], idx: &[usize], out: &mut [(f64, f64)]) {
+    let idx = &idx[..out.len()];
+    sincos_by(|k| a[idx[k]], out);
+}
+
+/// `out[k]` = the sine and cosine of `x(k)`, four lanes at a time on AVX2 when the processor
+/// has it, else one by one with `libm`.
+#[inline(always)]
+fn sincos_by(x: impl Fn(usize) -> f64, out: &mut [(f64, f64)]) {
     #[cfg(target_arch = "x86_64")]
     if std::is_x86_feature_detected!("avx2") {
         // SAFETY: the processor supports AVX2 (just checked).
-        unsafe { sincos_many_avx2(x, out) };
+        unsafe { sincos_by_avx2(&x, out) };
         return;
     }
-    for (o, &v) in out.iter_mut().zip(x) {
-        *o = libm::sincos(v);
+    for (k, o) in out.iter_mut().enumerate() {
+        *o = libm::sincos(x(k));
     }
 }
 
-/// [`sincos_many`] on AVX2 lanes.
+/// [`sincos_by`] on AVX2 lanes: blocks of four, the last block padded with zeros.
 ///
 /// # Safety
 /// The processor must support AVX2.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn sincos_many_avx2(x: &[f64], out: &mut [(f64, f64)]) {
-    for (xs, os) in x.chunks(4).zip(out.chunks_mut(4)) {
-        let mut four = [0.0; 4];
-        four[..xs.len()].copy_from_slice(xs);
+unsafe fn sincos_by_avx2<F: Fn(usize) -> f64>(x: &F, out: &mut [(f64, f64)]) {
+    use std::arch::x86_64::_mm256_set_pd;
+    for (b, os) in out.chunks_mut(4).enumerate() {
+        let k = 4 * b;
+        let m = os.len();
+        let lane = |i: usize| if i < m { x(k + i) } else { 0.0 };
+        let xv = _mm256_set_pd(lane(3), lane(2), lane(1), lane(0));
         // SAFETY: the processor supports AVX2 (the caller's contract).
-        let sc = unsafe { sincos4_avx2(four) };
-        os.copy_from_slice(&sc[..os.len()]);
+        let sc = unsafe { sincos4_avx2(xv) };
+        for (o, v) in os.iter_mut().zip(sc) {
+            *o = v;
+        }
     }
 }
 
@@ -101,7 +126,7 @@ const C6: f64 = f64::from_bits(0xbda8_fae9_be88_38d4);
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
-unsafe fn sincos4_avx2(x: [f64; 4]) -> [(f64, f64); 4] {
+unsafe fn sincos4_avx2(xv: std::arch::x86_64::__m256d) -> [(f64, f64); 4] {
     use std::arch::x86_64::*;
     let add = |a, b| _mm256_add_pd(a, b);
     let sub = |a, b| _mm256_sub_pd(a, b);
@@ -112,7 +137,6 @@ unsafe fn sincos4_avx2(x: [f64; 4]) -> [(f64, f64); 4] {
     let eq = |a, b| _mm256_cmpeq_epi64(a, b);
     let or = |a, b| _mm256_or_si256(a, b);
     let and = |a, b| _mm256_and_si256(a, b);
-    let xv = _mm256_loadu_pd(x.as_ptr());
     let bits = _mm256_castpd_si256(xv);
     // ix: the high word of |x|, per 64-bit lane.
     let ix = _mm256_srli_epi64::<32>(and(bits, seti(0x7fff_ffff_ffff_ffff)));
@@ -206,11 +230,16 @@ unsafe fn sincos4_avx2(x: [f64; 4]) -> [(f64, f64); 4] {
     let mut out = [(0.0, 0.0); 4];
     let redo = _mm256_movemask_pd(_mm256_castsi256_pd(redo));
     for (i, o) in out.iter_mut().enumerate() {
-        *o = if redo & (1 << i) != 0 {
-            libm::sincos(x[i])
-        } else {
-            (s_out[i], c_out[i])
-        };
+        *o = (s_out[i], c_out[i]);
+    }
+    if redo != 0 {
+        let mut x = [0.0; 4];
+        _mm256_storeu_pd(x.as_mut_ptr(), xv);
+        for (i, o) in out.iter_mut().enumerate() {
+            if redo & (1 << i) != 0 {
+                *o = libm::sincos(x[i]);
+            }
+        }
     }
     out
 }
@@ -231,6 +260,31 @@ mod tests {
             sincos_many(&x, &mut out[..len]);
             for (xi, oi) in x.iter().zip(&out[..len]) {
                 same(*xi, *oi);
+            }
+            assert!(
+                out[len].0.is_nan() && out[len].1.is_nan(),
+                "wrote past {len}"
+            );
+        }
+    }
+
+    /// [`sincos_at`] gives `libm::sincos` of the angles at the given indices, bit for bit, in
+    /// their order (indices out of order and repeated), at every length, and writes exactly as
+    /// many values as `out` holds; special angles on any lane are recomputed by `libm`.
+    #[test]
+    fn gathered_angles_are_libm_bit_for_bit() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(13);
+        let mut a: Vec<f64> = (0..50).map(|_| rng.random_range(-9.0..9.0)).collect();
+        a[7] = 1e-300;
+        a[11] = f64::NAN;
+        a[19] = 1e22;
+        a[23] = std::f64::consts::FRAC_PI_2;
+        for len in 0..40 {
+            let idx: Vec<usize> = (0..len + 2).map(|_| rng.random_range(0..a.len())).collect();
+            let mut out = vec![(f64::NAN, f64::NAN); len + 1];
+            sincos_at(&a, &idx, &mut out[..len]);
+            for (&j, oi) in idx.iter().zip(&out[..len]) {
+                same(a[j], *oi);
             }
             assert!(
                 out[len].0.is_nan() && out[len].1.is_nan(),
