@@ -24,12 +24,23 @@ usage: fcl_check.py ROBOT.urdf ROBOT.srdf SCENARIO.toml REACH.json [SAMPLES_PER_
 `--package-dir DIR` (repeatable) is where `package://NAME/…` mesh paths of an imported arm are
 looked up (as `DIR/NAME/…`, pinocchio's rule); relative mesh paths are taken from the URDF's
 folder.
+
+An imported arm's URDF may hold what pinocchio's URDF parser (urdfdom) does not read:
+- `<capsule radius length>` collision elements (kinsynth reads them: the axis along the
+  element's z, `length` between the two hemisphere centres). urdfdom drops every `<collision>`
+  of a link that has one; this script then reads that link's elements from the URDF itself
+  (a capsule as coal's `Capsule(radius, length)`, the same solid) and says so. A collision
+  element it cannot read either is an error, not a body left unchecked.
+- `continuous` joints: pinocchio stores cos θ and sin θ; kinsynth's path holds the angle θ
+  (on [−π, π], as kinsynth imports such a joint), and each configuration is built from it.
 """
 import functools
 import json
+import math
 import os
 import sys
 import tomllib
+import xml.etree.ElementTree as ET
 
 import coal
 import numpy as np
@@ -73,6 +84,185 @@ def obstacle_geometry(o, scenario_dir):
     raise ValueError(f"unknown obstacle shape {shape!r}")
 
 
+def resource_path(filename, package_dirs):
+    """Where pinocchio finds a mesh (its retrieveResourcePath): `package://` (or `model://`)
+    paths in the first package directory that has them, `file://` as given, relative paths in
+    the first package directory that has them, absolute paths as given; None when not found."""
+    scheme, sep, rest = filename.partition("://")
+    if sep:
+        if scheme == "file":
+            return rest
+        if scheme not in ("package", "model"):
+            return None
+    else:
+        if os.path.isabs(filename):
+            return filename
+        rest = filename
+    for d in package_dirs:
+        if os.path.exists(os.path.join(d, rest)):
+            return os.path.join(d, rest)
+    return None
+
+
+def numbers(element, attribute, count, default=None):
+    """`count` numbers of an XML attribute; ValueError naming it when missing or malformed."""
+    text = element.get(attribute, default)
+    if text is None:
+        raise ValueError(f"<{element.tag}> has no {attribute}")
+    try:
+        values = [float(v) for v in text.split()]
+    except ValueError:
+        values = []
+    if len(values) != count or not all(math.isfinite(v) for v in values):
+        raise ValueError(
+            f"<{element.tag} {attribute}=\"{text}\">: expected {count} finite number(s)"
+        )
+    return values
+
+
+def urdf_collision(element, package_dirs):
+    """A URDF `<collision>` element as (its origin in the link frame, coal geometry, shape
+    name), read as pinocchio reads the shapes it knows and `<capsule>` as kinsynth reads it."""
+    origin = element.find("origin")
+    if origin is None:
+        placement = pin.SE3.Identity()
+    else:
+        xyz = numbers(origin, "xyz", 3, "0 0 0")
+        rpy = numbers(origin, "rpy", 3, "0 0 0")
+        placement = pin.SE3(pin.rpy.rpyToMatrix(*rpy), np.array(xyz))
+    geometry = element.find("geometry")
+    shape = None if geometry is None else next(iter(geometry), None)
+    if shape is None:
+        raise ValueError("no <geometry> shape")
+    tag = shape.tag
+    if tag == "capsule":
+        # URDF (and kinsynth): along z, `length` between the hemisphere centres; coal's Capsule
+        # takes the same length (its halfLength is length / 2).
+        radius, = numbers(shape, "radius", 1)
+        length, = numbers(shape, "length", 1)
+        return placement, coal.Capsule(radius, length), tag
+    if tag == "sphere":
+        return placement, coal.Sphere(*numbers(shape, "radius", 1)), tag
+    if tag == "cylinder":
+        radius, = numbers(shape, "radius", 1)
+        length, = numbers(shape, "length", 1)
+        return placement, coal.Cylinder(radius, length), tag
+    if tag == "box":
+        return placement, coal.Box(*numbers(shape, "size", 3)), tag
+    if tag == "mesh":
+        filename = shape.get("filename", "")
+        path = resource_path(filename, package_dirs)
+        if path is None or not os.path.exists(path):
+            raise ValueError(f"mesh {filename!r} not found")
+        scale = numbers(shape, "scale", 3, "1 1 1")
+        # As pinocchio loads a collision mesh: its triangles, as a bounding-volume hierarchy.
+        return placement, coal.MeshLoader().load(path, np.array(scale)), tag
+    raise ValueError(f"unknown shape <{tag}>")
+
+
+def load_robot(urdf, package_dirs=()):
+    """pinocchio's model of the URDF and its collision model, completed where pinocchio's URDF
+    parser dropped `<collision>` elements (it drops all of a link's when it cannot read one,
+    such as a `<capsule>`): those links' elements are read from the URDF here, attached to the
+    link's frame as pinocchio attaches its own. Returns (model, geometry model, notes); exits
+    with a message for a URDF it cannot read completely."""
+    dirs = list(package_dirs) + [os.path.dirname(os.path.abspath(urdf))]
+    try:
+        root = ET.parse(urdf).getroot()
+        model = pin.buildModelFromUrdf(urdf)
+        # Relative mesh paths are taken from the URDF's folder.
+        geom = pin.buildGeomFromUrdf(model, urdf, pin.GeometryType.COLLISION, package_dirs=dirs)
+    except (OSError, ET.ParseError, ValueError, RuntimeError) as e:
+        raise SystemExit(f"{urdf}: {e}")
+    notes = []
+    for link in root.findall("link"):
+        elements = link.findall("collision")
+        name = link.get("name", "")
+        if not elements:
+            continue
+        frame_id = model.getFrameId(name, pin.FrameType.BODY)
+        if frame_id >= model.nframes:
+            raise SystemExit(f"{urdf}: link '{name}' has <collision> elements but no frame")
+        read = sum(o.parentFrame == frame_id for o in geom.geometryObjects)
+        if read == len(elements):
+            continue
+        if read:
+            raise SystemExit(
+                f"{urdf}: link '{name}': pinocchio read {read} of its {len(elements)} "
+                "<collision> elements"
+            )
+        frame = model.frames[frame_id]
+        shapes = []
+        for k, element in enumerate(elements):
+            try:
+                placement, g, tag = urdf_collision(element, dirs)
+            except ValueError as e:
+                raise SystemExit(
+                    f"{urdf}: link '{name}', <collision> {k + 1} of {len(elements)}: {e} "
+                    "(pinocchio's URDF parser dropped this link's collision elements; unread, "
+                    "they would go unchecked)"
+                )
+            geom.addGeometryObject(
+                pin.GeometryObject(
+                    f"{name}_{k}", frame.parentJoint, frame_id, frame.placement * placement, g
+                )
+            )
+            shapes.append(tag)
+        notes.append(
+            f"note: pinocchio's URDF parser dropped the <collision> elements of link '{name}'; "
+            f"read from the URDF here: {', '.join(shapes)}"
+        )
+    return model, geom, notes
+
+
+def enable_self_pairs(model, geom, srdf):
+    """Every pair of robot bodies on different joints, less the SRDF's disabled link pairs
+    (pinocchio matches a body to a link by its frame, the added bodies included)."""
+    geom.addAllCollisionPairs()
+    try:
+        pin.removeCollisionPairs(model, geom, srdf)
+    except (ValueError, RuntimeError) as e:
+        raise SystemExit(str(e) if srdf in str(e) else f"{srdf}: {e}")
+
+
+def read_file(path, parse, binary=False):
+    """`parse` of a file's contents; exits with a message when it cannot be read."""
+    try:
+        with open(path, "rb" if binary else "r") as f:
+            return parse(f)
+    except (OSError, ValueError) as e:  # TOML and JSON errors are ValueErrors
+        raise SystemExit(f"{path}: {e}")
+
+
+def joint_slots(model, names, source):
+    """Where each named joint's value goes in pinocchio's configuration: (idx_q, nq), nq = 2
+    for a continuous joint (cos θ, sin θ), 1 for a revolute or prismatic joint."""
+    slots = []
+    for n in names:
+        if not model.existJointName(n):
+            raise SystemExit(f"{source}: joint {n!r} is not in the URDF")
+        j = model.joints[model.getJointId(n)]
+        if j.nv != 1 or j.nq not in (1, 2):
+            raise SystemExit(
+                f"{source}: joint {n!r} ({j.shortname()}): only revolute, continuous and "
+                "prismatic joints are supported"
+            )
+        slots.append((j.idx_q, j.nq))
+    return slots
+
+
+def configuration(model, slots, values):
+    """pinocchio's configuration with the joints of `slots` at `values` (angles in rad, lengths
+    in m) and every other joint at its neutral value (0)."""
+    q = pin.neutral(model)
+    for (i, nq), v in zip(slots, values):
+        if nq == 2:
+            q[i], q[i + 1] = math.cos(v), math.sin(v)
+        else:
+            q[i] = v
+    return q
+
+
 def package_dirs_of(argv):
     """The arguments without the `--package-dir DIR` pairs, and those directories."""
     rest, dirs = [], []
@@ -94,21 +284,19 @@ def main():
         usage = __doc__[__doc__.index("usage:") :].split("\n\n")[0]
         sys.exit(f"fcl_check.py: expected 4 or 5 arguments, got {len(args)}\n{usage}")
     urdf, srdf, scenario_path, reach_path = args[:4]
-    samples = int(args[4]) if len(args) > 4 else 400
-    with open(scenario_path, "rb") as f:
-        scenario = tomllib.load(f)
+    try:
+        samples = int(args[4]) if len(args) > 4 else 400
+    except ValueError:
+        samples = 0
+    if samples < 1:
+        sys.exit(f"fcl_check.py: SAMPLES_PER_EDGE must be a positive integer, not {args[4]!r}")
+    scenario = read_file(scenario_path, tomllib.load, binary=True)
     clearance = scenario.get("clearance", 0.0)
-    model = pin.buildModelFromUrdf(urdf)
-    geom = pin.buildGeomFromUrdf(
-        model,
-        urdf,
-        pin.GeometryType.COLLISION,
-        # Relative mesh paths are taken from the URDF's folder.
-        package_dirs=package_dirs + [os.path.dirname(os.path.abspath(urdf))],
-    )
+    model, geom, notes = load_robot(urdf, package_dirs)
+    for n in notes:
+        print(n)
     robot_geoms = list(range(len(geom.geometryObjects)))
-    geom.addAllCollisionPairs()
-    pin.removeCollisionPairs(model, geom, srdf)
+    enable_self_pairs(model, geom, srdf)
     self_pairs = len(geom.collisionPairs)
     obstacles = []
     meshes = 0
@@ -128,8 +316,7 @@ def main():
             env_pairs.append(len(geom.collisionPairs) - 1)
     data = model.createData()
     gdata = pin.GeometryData(geom)
-    with open(reach_path) as f:
-        report = json.load(f)
+    report = read_file(reach_path, json.load)
     checked = 0
     hits = []
     worst = np.inf
@@ -138,12 +325,16 @@ def main():
         path = t.get("path")
         if not path:
             continue
-        idx = [model.joints[model.getJointId(n)].idx_q for n in path["joint_names"]]
-        pts = [np.array(p) for p in path["points"]]
+        slots = joint_slots(model, path["joint_names"], reach_path)
+        pts = [np.array(p, dtype=float) for p in path["points"]]
+        if any(len(p) != len(slots) for p in pts):
+            sys.exit(
+                f"fcl_check.py: {reach_path}: task {t['index']}: a path point has not one "
+                f"value per joint ({len(slots)})"
+            )
         for a, b in zip(pts, pts[1:]):
             for s in np.linspace(0.0, 1.0, samples + 1):
-                q = pin.neutral(model)
-                q[idx] = a + s * (b - a)
+                q = configuration(model, slots, a + s * (b - a))
                 pin.updateGeometryPlacements(model, data, geom, gdata, q)
                 pin.computeDistances(geom, gdata)
                 checked += 1

@@ -8,7 +8,11 @@ missed (an R that misses reachable tasks misleads the optimiser).
 
 - The robot is the exported URDF with its SRDF (`kinsynth urdf` or `optimize` write both); the
   obstacles are the scenario's, loaded as `fcl_check.py` loads them (meshes by their
-  `representation`).
+  `representation`). An imported arm's URDF is read as `fcl_check.py` reads it: `<capsule>`
+  collision elements, which pinocchio's URDF parser drops, are read by the script.
+- The planner's state is one value per joint: the angle of a revolute joint, the length of a
+  prismatic one, and the angle θ of a `continuous` joint, on [−π, π] as kinsynth imports it
+  (pinocchio's configuration holds cos θ and sin θ).
 - A state is valid when every robot body is farther than the scenario's `clearance` from every
   obstacle and every self pair the SRDF leaves enabled is apart (coal's collision with a
   security margin).
@@ -45,7 +49,14 @@ import numpy as np
 import pinocchio as pin
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from fcl_check import obstacle_geometry, rotation  # noqa: E402
+from fcl_check import (  # noqa: E402
+    configuration,
+    enable_self_pairs,
+    load_robot,
+    obstacle_geometry,
+    read_file,
+    rotation,
+)
 
 DENSE = 400  # samples per edge of the dense re-check
 
@@ -54,24 +65,30 @@ class Problem:
     """The robot, its collision model with the obstacles, and a validity test."""
 
     def __init__(self, urdf, srdf, scenario_path, tip="tool0", package_dirs=()):
-        with open(scenario_path, "rb") as f:
-            self.scenario = tomllib.load(f)
+        self.scenario = read_file(scenario_path, tomllib.load, binary=True)
         self.clearance = float(self.scenario.get("clearance", 0.0))
         planner = self.scenario.get("planner", {})
         self.tolerance = float(planner.get("goal_tolerance", 0.02))
-        self.model = pin.buildModelFromUrdf(urdf)
-        if self.model.nq != self.model.nv:
-            raise SystemExit(f"{urdf}: continuous or multi-dof joints are not supported")
-        self.geom = pin.buildGeomFromUrdf(
-            self.model,
-            urdf,
-            pin.GeometryType.COLLISION,
-            # Relative mesh paths are taken from the URDF's folder.
-            package_dirs=list(package_dirs) + [os.path.dirname(os.path.abspath(urdf))],
-        )
+        self.model, self.geom, self.notes = load_robot(urdf, package_dirs)
+        # The state: one value per joint, in pinocchio's velocity order; where each goes in q.
+        self.slots = []
+        self.lo = np.zeros(self.model.nv)
+        self.hi = np.zeros(self.model.nv)
+        for j, name in zip(self.model.joints[1:], self.model.names[1:]):
+            if j.nv != 1 or j.nq not in (1, 2):
+                raise SystemExit(
+                    f"{urdf}: joint {name!r} ({j.shortname()}): only revolute, continuous and "
+                    "prismatic joints are supported"
+                )
+            self.slots.append((j.idx_q, j.nq))
+            if j.nq == 2:  # continuous: kinsynth's range
+                self.lo[j.idx_v], self.hi[j.idx_v] = -np.pi, np.pi
+            else:
+                self.lo[j.idx_v] = self.model.lowerPositionLimit[j.idx_q]
+                self.hi[j.idx_v] = self.model.upperPositionLimit[j.idx_q]
+        self.n = self.model.nv
         robot = len(self.geom.geometryObjects)
-        self.geom.addAllCollisionPairs()
-        pin.removeCollisionPairs(self.model, self.geom, srdf)
+        enable_self_pairs(self.model, self.geom, srdf)
         self.self_pairs = len(self.geom.collisionPairs)
         obstacles = []
         for k, o in enumerate(self.scenario.get("obstacle", [])):
@@ -88,23 +105,25 @@ class Problem:
         for p, cp in enumerate(self.geom.collisionPairs):
             env = cp.second in obstacles or cp.first in obstacles
             self.gdata.collisionRequests[p].security_margin = self.clearance if env else 0.0
-        self.lo = np.array(self.model.lowerPositionLimit, dtype=float)
-        self.hi = np.array(self.model.upperPositionLimit, dtype=float)
         self.tip_frame = self.model.getFrameId(tip)
         if self.tip_frame >= len(self.model.frames):
             raise SystemExit(f"{urdf}: no frame named {tip!r} (--tip)")
         self.checks = 0
 
-    def valid(self, q):
+    def q(self, x):
+        """pinocchio's configuration for the state x (one value per joint)."""
+        return configuration(self.model, self.slots, x)
+
+    def valid(self, x):
         """No contact: obstacles beyond the clearance, enabled self pairs apart."""
         self.checks += 1
         return not pin.computeCollisions(
-            self.model, self.data, self.geom, self.gdata, np.asarray(q, dtype=float), True
+            self.model, self.data, self.geom, self.gdata, self.q(x), True
         )
 
-    def tip(self, q):
-        """The pose of `tool0` at q."""
-        pin.forwardKinematics(self.model, self.data, q)
+    def tip(self, x):
+        """The pose of `tool0` at the state x."""
+        pin.forwardKinematics(self.model, self.data, self.q(x))
         pin.updateFramePlacement(self.model, self.data, self.tip_frame)
         return self.data.oMf[self.tip_frame]
 
@@ -133,7 +152,8 @@ class Problem:
 
     def ik(self, target, goal, q0, iterations=150):
         """Damped least squares on the tip position (and orientation for an oriented goal)
-        within the limits; the final q and whether it meets the goal."""
+        within the limits, in the planner's state (one value per joint) from q0; the final
+        state and whether it meets the goal."""
         q = q0.copy()
         w = 0.3  # metres per radian, kinsynth's default orientation_weight
         for _ in range(iterations):
@@ -142,8 +162,9 @@ class Problem:
                 goal is None or angle < 0.25 * goal[2]
             ):
                 break
+            # Its columns are the joints' velocities: dθ for every joint, continuous ones too.
             J6 = pin.computeFrameJacobian(
-                self.model, self.data, q, self.tip_frame, pin.LOCAL_WORLD_ALIGNED
+                self.model, self.data, self.q(q), self.tip_frame, pin.LOCAL_WORLD_ALIGNED
             )
             if goal is None:
                 J, err = J6[:3], ep
@@ -175,7 +196,7 @@ def plan_task(problem, target, goal, seconds, rng, resolution):
     from ompl import geometric as og
 
     start_time = time.monotonic()
-    n = problem.model.nq
+    n = problem.n
     home = np.zeros(n)
     goals = []
     tries = 0
@@ -240,10 +261,11 @@ def main():
     ou.RNG.setSeed(args.seed + 1)  # OMPL refuses seed 0
     rng = np.random.default_rng(args.seed)
     problem = Problem(args.urdf, args.srdf, args.scenario, args.tip, args.package_dir)
-    with open(args.reach) as f:
-        report = json.load(f)
+    report = read_file(args.reach, json.load)
     tasks = problem.scenario.get("task", [])
-    home_valid = problem.valid(np.zeros(problem.model.nq))
+    for n in problem.notes:
+        print(n)
+    home_valid = problem.valid(np.zeros(problem.n))
     if not home_valid:
         print("home collides: OMPL can reach no task")
     counts = {"kinsynth": 0, "ompl": 0, "only_ompl": 0, "checked": 0, "skipped": 0}
