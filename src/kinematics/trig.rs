@@ -3,8 +3,10 @@
 //! Forward kinematics takes the sine and cosine of every rotation axis; `libm::sincos` (the
 //! FreeBSD `msun` algorithm: argument reduction by `π/2`, then the `k_sin` / `k_cos`
 //! polynomials) makes the results the same on every platform. [`sincos_many`] gives exactly
-//! the values of `libm::sincos`, bit for bit, for any number of angles in one call (forward
-//! kinematics passes all the rotation axes it is about to evaluate), four at a time: on AVX2
+//! the values of `libm::sincos`, bit for bit, for any number of angles in one call, and
+//! [`sincos_at`] for the angles at given places of a vector (forward kinematics passes all the
+//! rotation axes it is about to evaluate, read straight from the actuation vector), four at a
+//! time: on AVX2
 //! lanes (detected at run time) the small-argument path and the one-step reduction are
 //! computed for all four with the same operations in the same order (no fused multiply-add),
 //! and any lane that `libm` would treat otherwise (a tiny angle, one within rounding of a
