@@ -1,17 +1,16 @@
 //! Sines and cosines of joint angles four at a time.
 //!
-//! Forward kinematics takes the sine and cosine of every rotation axis; `libm::sincos` (the
-//! FreeBSD `msun` algorithm: argument reduction by `π/2`, then the `k_sin` / `k_cos`
-//! polynomials) makes the results the same on every platform. [`sincos_many`] gives exactly
-//! the values of `libm::sincos`, bit for bit, for any number of angles in one call, and
-//! [`sincos_at`] for the angles at given places of a vector (forward kinematics passes all the
-//! rotation axes it is about to evaluate, read straight from the actuation vector), four at a
-//! time: on AVX2 lanes (detected at run time) the small-argument path and the one-step
-//! reduction are computed for all four with the same operations in the same order (no fused
-//! multiply-add),
-//! and any lane that `libm` would treat otherwise (a tiny angle, one within rounding of a
-//! multiple of `π/2` that needs a second reduction step, a huge or non-finite one) is
-//! recomputed by `libm` itself. Elsewhere the angles are `libm::sincos` one by one.
+//! Forward kinematics takes the sine and cosine of every rotation axis; `libm::sincos` (the FreeBSD
+//! `msun` algorithm: argument reduction by `π/2`, then the `k_sin` / `k_cos` polynomials) makes the
+//! results the same on every platform. [`sincos_many`] gives exactly the values of `libm::sincos`,
+//! bit for bit, for any number of angles in one call, and [`sincos_at`] for the angles at given
+//! places of a vector (forward kinematics passes all the rotation axes it is about to evaluate,
+//! read straight from the actuation vector), four at a time: on AVX2 lanes (detected at run time)
+//! the small-argument path and the one-step reduction are computed for all four with the same
+//! operations in the same order (no fused multiply-add), and any lane that `libm` would treat
+//! otherwise (a tiny angle, one within rounding of a multiple of `π/2` that needs a second
+//! reduction step, a huge or non-finite one) is recomputed by `libm` itself. Elsewhere the angles
+//! are `libm::sincos` one by one.
 
 /// `out[i] = (sin x[i], cos x[i])` for every angle of `x` (as many as `out` holds, which must
 /// not exceed `x.len()`), exactly as `libm::sincos` gives them, four at a time, in one call so
