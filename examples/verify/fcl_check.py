@@ -135,18 +135,15 @@ def urdf_collision(element, package_dirs):
     if shape is None:
         raise ValueError("no <geometry> shape")
     tag = shape.tag
-    if tag == "capsule":
-        # URDF (and kinsynth): along z, `length` between the hemisphere centres; coal's Capsule
-        # takes the same length (its halfLength is length / 2).
+    if tag in ("capsule", "cylinder"):
+        # Both along z. A capsule (URDF, and kinsynth): `length` between the hemisphere
+        # centres; coal's Capsule takes the same length (its halfLength is length / 2).
         radius, = numbers(shape, "radius", 1)
         length, = numbers(shape, "length", 1)
-        return placement, coal.Capsule(radius, length), tag
+        solid = coal.Capsule if tag == "capsule" else coal.Cylinder
+        return placement, solid(radius, length), tag
     if tag == "sphere":
         return placement, coal.Sphere(*numbers(shape, "radius", 1)), tag
-    if tag == "cylinder":
-        radius, = numbers(shape, "radius", 1)
-        length, = numbers(shape, "length", 1)
-        return placement, coal.Cylinder(radius, length), tag
     if tag == "box":
         return placement, coal.Box(*numbers(shape, "size", 3)), tag
     if tag == "mesh":
@@ -183,8 +180,10 @@ def load_robot(urdf, package_dirs=()):
         frame_id = model.getFrameId(name, pin.FrameType.BODY)
         if frame_id >= model.nframes:
             raise SystemExit(f"{urdf}: link '{name}' has <collision> elements but no frame")
+        # urdfdom drops all of a link's elements or none; a mesh may give pinocchio more than
+        # one object.
         read = sum(o.parentFrame == frame_id for o in geom.geometryObjects)
-        if read == len(elements):
+        if read >= len(elements):
             continue
         if read:
             raise SystemExit(
