@@ -533,3 +533,88 @@ fn urdf_warns_of_a_design_folded_at_home() {
         }
     }
 }
+
+/// Contacts of every pair of body frames over the samples `AllowedCollisions` draws (same seed,
+/// same stream), counted one pair and one sample at a time with no culling: the brute force the
+/// "Always" rule is checked against.
+fn contact_counts(
+    chain: &kinsynth::kinematics::Chain,
+    body: &RobotBody,
+    samples: usize,
+    seed: u64,
+) -> std::collections::HashMap<(String, String), usize> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut q = vec![0.0; chain.dof()];
+    let mut frames = chain.frames();
+    let mut placed = kinsynth::collision::body::Placed::default();
+    let mut counts = std::collections::HashMap::new();
+    let mut touching = std::collections::HashSet::new();
+    for _ in 0..samples {
+        chain.sample_config(&mut rng, &mut q);
+        chain.fk(&q, &mut frames);
+        body.place(&frames, &mut placed);
+        touching.clear();
+        for p in 0..body.len() {
+            for r in p + 1..body.len() {
+                let (a, b) = (body.frame(p).to_string(), body.frame(r).to_string());
+                if a != b && body.pair_distance(&frames, &placed, p, r) <= 0.0 {
+                    touching.insert(if a < b { (a, b) } else { (b, a) });
+                }
+            }
+        }
+        for k in touching.drain() {
+            *counts.entry(k).or_insert(0) += 1;
+        }
+    }
+    counts
+}
+
+#[test]
+fn always_pairs_are_those_in_contact_in_most_samples() {
+    // Link 3 slides back along link 2 (tx from -0.5 to 0): at home (tx = 0) links 2 and 4 are
+    // apart, in most samples link 3 is short enough for them to touch.
+    let mut found = 0;
+    for (short, radius) in [(0.07, 0.03), (0.12, 0.05), (0.1, 0.06), (0.3, 0.03)] {
+        let mut d = folding_arm();
+        d.link_radius = radius;
+        d.links[2].a = short;
+        d.links[2].axes = axes(&[(Axis::Rz, -0.5, 0.5), (Axis::Tx, -0.5, 0.0)]);
+        let chain = d.chain();
+        let config = SelfCollisionConfig::default();
+        let body = RobotBody::new(&chain, Vec::new(), &config);
+        let counts = contact_counts(&chain, &body, config.samples, config.seed);
+        let count = |a: &str, b: &str| {
+            let key = if a < b { (a, b) } else { (b, a) };
+            counts
+                .get(&(key.0.to_string(), key.1.to_string()))
+                .copied()
+                .unwrap_or(0)
+        };
+        let most = (0.95 * config.samples as f64).ceil() as usize;
+        for x in body.acm().disabled() {
+            if x.reason == Reason::Always {
+                found += 1;
+                let n = count(&x.link1, &x.link2);
+                assert!(n >= most, "{x:?}: in contact in only {n} samples");
+            }
+        }
+        // A pair left enabled is in contact in fewer samples, or is a fold of the arm at home
+        // (which stays enabled on purpose).
+        let mut frames = chain.frames();
+        let mut placed = kinsynth::collision::body::Placed::default();
+        chain.fk(chain.home(), &mut frames);
+        body.place(&frames, &mut placed);
+        for &(p, q) in body.self_pairs() {
+            let (p, q) = (p as usize, q as usize);
+            let n = count(body.frame(p), body.frame(q));
+            let at_home = body.pair_distance(&frames, &placed, p, q) <= 0.0;
+            assert!(
+                n < most || at_home,
+                "{} and {} are in contact in {n} samples but checked",
+                body.frame(p),
+                body.frame(q)
+            );
+        }
+    }
+    assert!(found >= 2, "the designs give {found} Always pairs");
+}

@@ -253,16 +253,64 @@ impl AllowedCollisions {
         if samples > 0 && chain.dof() > 0 && !candidates.is_empty() {
             let mut rng = ChaCha8Rng::seed_from_u64(config.seed);
             let mut q = vec![0.0; chain.dof()];
+            // The body pairs of the candidates (with their candidate), rebuilt when a
+            // candidate drops out; per sample, those whose bounding balls meet.
+            let mut pairs: Vec<(usize, u32, u32)> = Vec::new();
+            let mut near: Vec<(usize, u32, u32)> = Vec::new();
+            let mut hit: Vec<bool> = Vec::new();
+            let mut listed = usize::MAX;
             for _ in 0..samples {
                 if candidates.is_empty() {
                     break;
+                }
+                if listed != candidates.len() {
+                    listed = candidates.len();
+                    pairs.clear();
+                    for (k, c) in candidates.iter().enumerate() {
+                        for &p in &groups[c.0].bodies {
+                            for &q in &groups[c.1].bodies {
+                                pairs.push((k, p as u32, q as u32));
+                            }
+                        }
+                    }
                 }
                 chain.sample_config(&mut rng, &mut q);
                 chain.fk(&q, &mut frames);
                 body.place(&frames, &mut placed);
                 body.balls(&frames, &placed, &mut balls);
-                for c in candidates.iter_mut() {
-                    if contact(&frames, &placed, &balls, c.0, c.1) {
+                // The same test as `contact`, with the exact distances of pairs of capsules
+                // measured four at a time (the same values as one by one). Without a branch
+                // per pair: every pair is written, and kept when its balls meet.
+                near.resize(pairs.len(), (0, 0, 0));
+                let mut kept = 0;
+                for &(k, p, q) in &pairs {
+                    let ((cp, rp), (cq, rq)) = (balls[p as usize], balls[q as usize]);
+                    let gap = rp + rq;
+                    near[kept] = (k, p, q);
+                    kept += usize::from((cp - cq).norm_squared() <= gap * gap);
+                }
+                near.truncate(kept);
+                hit.clear();
+                hit.resize(candidates.len(), false);
+                for block in near.chunks(4) {
+                    let pair = |i: usize| {
+                        let (_, p, q) = block[i.min(block.len() - 1)];
+                        (p, q)
+                    };
+                    let batch = [pair(0), pair(1), pair(2), pair(3)];
+                    let d = body
+                        .capsule_pair_distances(&frames, batch)
+                        .unwrap_or_else(|| {
+                            batch.map(|(p, q)| {
+                                body.pair_distance(&frames, &placed, p as usize, q as usize)
+                            })
+                        });
+                    for (&(k, _, _), d) in block.iter().zip(d) {
+                        hit[k] |= d <= 0.0;
+                    }
+                }
+                for (c, &h) in candidates.iter_mut().zip(&hit) {
+                    if h {
                         c.2 += 1;
                     } else {
                         c.3 += 1;
