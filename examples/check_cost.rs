@@ -4,6 +4,7 @@
 //! ```sh
 //! cargo run --release --example check_cost -- edges [SCENARIO] [REPS]
 //! cargo run --release --example check_cost -- reach [SCENARIO] [REPS]
+//! cargo run --release --example check_cost -- bounds [SCENARIO] [SUBSTEPS]
 //! ```
 //!
 //! `edges` checks the same 256 planner-like edges at `L_max` = π/4 (`oracle::sample_edges`,
@@ -15,7 +16,12 @@
 //! defaults to the bundled paper-3d. Set `CHECKER=segment` or `CHECKER=certified` to run only
 //! one, `AIMED_STEERING=on` to plan with `planner.aimed_steering`, and `IK_CLAMP=on` to plan
 //! without `planner.ik_hold_limits` (the paper's clamped inverse-kinematics steps), and
-//! `SELF_COLLISION=off` to check `edges` without self pairs (what they cost). Under
+//! `SELF_COLLISION=off` to check `edges` without self pairs (what they cost). `bounds` takes
+//! the edges of `edges` and compares, per item `certified` first tests on a step (a body
+//! against the environment, a self pair), its motion bound with the path the body really
+//! travels, measured with `SUBSTEPS` steps (default 400): how loose the bounds are, and how
+//! many items and steps the end clearances prove at once with them and would prove with the
+//! measured paths. Under
 //! `valgrind --tool=cachegrind`, the instruction count of a run with `REPS` minus that of a run
 //! with 0 (the set-up alone), divided by the number of edges or runs, is the instruction cost
 //! the README quotes.
@@ -127,9 +133,125 @@ fn main() {
                 );
             }
         }
+        "bounds" => {
+            let s = match file {
+                Some(f) => load(f),
+                None => Scenario::from_spec(&generate(Preset::Paper3d, 11)).expect("preset"),
+            };
+            bounds(&s, reps(400));
+        }
         other => {
-            eprintln!("check_cost: unknown mode {other:?} (edges or reach)");
+            eprintln!("check_cost: unknown mode {other:?} (edges, reach or bounds)");
             std::process::exit(2);
         }
     }
+}
+
+/// `bounds`: per item `certified` first tests on a step (each body against the environment,
+/// each checked self pair; [`step_bounds`]), its motion bound against the path length of the
+/// moving body's capsule core ends measured with `substeps` steps (relative to the other body's
+/// links for a self pair), on the 256 edges of `edges`, and how many items the clearances at
+/// the step's two ends prove with that bound and would prove with the measured length.
+fn bounds(s: &Scenario, substeps: usize) {
+    use kinsynth::collision::edge::certified::step_bounds;
+    use nalgebra::IsometryMatrix3;
+    let chain = s.space.largest().chain();
+    let scene = Arc::new(CollisionScene::new(&s.workspace));
+    let body = kinsynth::collision::RobotBody::of_chain(&chain);
+    let l_max = std::f64::consts::FRAC_PI_4;
+    let edges = sample_edges(&scene, &chain, &body, l_max, s.planner.lambda, 256, 7);
+    let substeps = substeps.max(1);
+    let (mut fa, mut fb, mut f) = (chain.frames(), chain.frames(), chain.frames());
+    let mut pa = kinsynth::collision::body::Placed::default();
+    let mut pb = pa.clone();
+    let mut q = vec![0.0; chain.dof()];
+    // Per kind (against the environment, self pair): items, the sum of bound / length, items
+    // proven by the bound, items the measured length would prove.
+    let mut rows = [[0.0f64; 4]; 2];
+    // The largest length / bound seen (above 1 would mean a bound that does not hold).
+    let mut worst: f64 = 0.0;
+    // Steps whose two ends are free, and of them those proven at once by the bounds and those
+    // the measured lengths would prove at once.
+    let mut steps = [0usize; 3];
+    let clearance = |frames: &kinsynth::kinematics::Frames,
+                     placed: &kinsynth::collision::body::Placed,
+                     b: usize| {
+        let ball = body.ball(frames, placed, b);
+        body.clearance(&scene, frames, placed, b, &ball, f64::INFINITY, u32::MAX)
+            .0
+    };
+    for (a, b) in &edges {
+        chain.fk(a, &mut fa);
+        chain.fk(b, &mut fb);
+        body.place(&fa, &mut pa);
+        body.place(&fb, &mut pb);
+        let items: Vec<_> = step_bounds(&chain, &body, a, b)
+            .into_iter()
+            .filter(|it| it.body < body.segments())
+            .collect();
+        // Per item, the path lengths of the core's two ends, and their last positions.
+        let mut length = vec![[0.0f64; 2]; items.len()];
+        let mut last: Vec<Option<[nalgebra::Point3<f64>; 2]>> = vec![None; items.len()];
+        for k in 0..=substeps {
+            let t = k as f64 / substeps as f64;
+            for ((qi, x), y) in q.iter_mut().zip(a).zip(b) {
+                *qi = x + t * (y - x);
+            }
+            chain.fk(&q, &mut f);
+            for (i, it) in items.iter().enumerate() {
+                let inv = match it.relative_to.map_or(0, |p| body.level(p)) {
+                    0 => IsometryMatrix3::identity(),
+                    l => f.axis_frames[l - 1].inverse(),
+                };
+                let ends = f.segments[it.body].map(|p| inv * p);
+                if let Some(before) = last[i] {
+                    for ((len, now), was) in length[i].iter_mut().zip(ends).zip(before) {
+                        *len += (now - was).norm();
+                    }
+                }
+                last[i] = Some(ends);
+            }
+        }
+        let mut whole = [true; 3];
+        for (it, len) in items.iter().zip(&length) {
+            let len = len[0].max(len[1]);
+            let (c0, c1) = match it.relative_to {
+                None => (clearance(&fa, &pa, it.body), clearance(&fb, &pb, it.body)),
+                Some(p) => (
+                    body.pair_distance(&fa, &pa, p, it.body),
+                    body.pair_distance(&fb, &pb, p, it.body),
+                ),
+            };
+            if c0 <= 0.0 || c1 <= 0.0 {
+                whole[0] = false;
+                continue; // an end in collision: nothing to prove
+            }
+            whole[1] &= c0 + c1 > it.bound;
+            whole[2] &= c0 + c1 > len;
+            let row = &mut rows[usize::from(it.relative_to.is_some())];
+            row[0] += 1.0;
+            row[1] += it.bound / len.max(1e-12);
+            row[2] += f64::from(u8::from(c0 + c1 > it.bound));
+            row[3] += f64::from(u8::from(c0 + c1 > len));
+            worst = worst.max(len / it.bound);
+        }
+        if whole[0] {
+            steps[0] += 1;
+            steps[1] += usize::from(whole[1]);
+            steps[2] += usize::from(whole[2]);
+        }
+    }
+    for (name, [n, ratio, by_bound, by_length]) in ["environment", "self pairs"].iter().zip(rows) {
+        println!(
+            "{name:>12}: {n} items, bound {:.2}× the path length on average; proven at once {:.1} % (with the path length: {:.1} %)",
+            ratio / n.max(1.0),
+            100.0 * by_bound / n.max(1.0),
+            100.0 * by_length / n.max(1.0)
+        );
+    }
+    println!(
+        "steps with both ends free: {}; proven at once: {} (with the path lengths: {})",
+        steps[0], steps[1], steps[2]
+    );
+    println!("largest path length / bound: {worst:.4} (at most 1 when the bounds hold)");
 }

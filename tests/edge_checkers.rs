@@ -205,6 +205,66 @@ fn sampled_edges_respect_the_step_bound() {
 }
 
 #[test]
+fn certified_step_bounds_hold_along_dense_steps() {
+    // Every bound `certified` starts a step with covers the path the moving body's core ends
+    // really travel (relative to the pair's other body for a self pair), measured densely; a
+    // step that does not move has bounds of 0.
+    use kinsynth::collision::edge::certified::step_bounds;
+    let s = Scenario::from_spec(&generate(Preset::Paper3d, 6)).unwrap();
+    let chain = s.space.largest().chain();
+    let scene = CollisionScene::new(&s.workspace);
+    let body = kinsynth::collision::RobotBody::of_chain(&chain);
+    let mut f = chain.frames();
+    let mut q = vec![0.0; chain.dof()];
+    let (mut pairs, mut tightest) = (0, 0.0f64);
+    for (a, b) in sample_edges(&scene, &chain, &body, PI / 4.0, 0.1, 12, 5) {
+        let items = step_bounds(&chain, &body, &a, &b);
+        assert_eq!(items.len(), body.len() + body.self_pairs().len());
+        assert!(step_bounds(&chain, &body, &a, &a)
+            .iter()
+            .all(|it| it.bound == 0.0));
+        let mut length = vec![[0.0f64; 2]; items.len()];
+        let mut last: Vec<Option<[Point3<f64>; 2]>> = vec![None; items.len()];
+        let n = 300;
+        for k in 0..=n {
+            let t = k as f64 / n as f64;
+            for ((qi, x), y) in q.iter_mut().zip(&a).zip(&b) {
+                *qi = x + t * (y - x);
+            }
+            chain.fk(&q, &mut f);
+            for (i, it) in items.iter().enumerate() {
+                let inv = match it.relative_to.map_or(0, |p| body.level(p)) {
+                    0 => nalgebra::IsometryMatrix3::identity(),
+                    l => f.axis_frames[l - 1].inverse(),
+                };
+                let ends = f.segments[it.body].map(|p| inv * p);
+                if let Some(before) = last[i] {
+                    for ((len, now), was) in length[i].iter_mut().zip(ends).zip(before) {
+                        *len += (now - was).norm();
+                    }
+                }
+                last[i] = Some(ends);
+            }
+        }
+        for (it, len) in items.iter().zip(&length) {
+            let len = len[0].max(len[1]);
+            assert!(
+                len <= it.bound * (1.0 + 1e-9),
+                "{it:?}: the core travels {len}"
+            );
+            pairs += usize::from(it.relative_to.is_some());
+            tightest = tightest.max(len / it.bound);
+        }
+    }
+    assert!(pairs > 0);
+    // The bounds are not vacuous: some come within a factor 2 of the measured path.
+    assert!(
+        tightest > 0.5,
+        "the tightest bound is {tightest} of the path"
+    );
+}
+
+#[test]
 fn certified_has_no_false_free_edge_on_a_mesh_scene() {
     let path =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scenarios/pipework.toml");

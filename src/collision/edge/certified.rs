@@ -640,6 +640,106 @@ fn two<T>(v: &mut [T], i: usize, j: usize) -> (&mut T, &mut T) {
     }
 }
 
+/// Body `b`'s bound on how far it moves over the whole step, from the prepared `work` (with
+/// the twists of both ends) and the frames and placement of the step's ends: `(S, A, u0, u1,
+/// bound)`, its speed cap, acceleration bound, end speeds and the motion bound.
+#[inline(always)]
+fn env_bound(
+    work: &Work,
+    bounds: &MotionBounds,
+    body: &RobotBody,
+    (fa, pa): (&Frames, &Placed),
+    (fb, pb): (&Frames, &Placed),
+    b: usize,
+) -> (f64, f64, f64, f64, f64) {
+    let plain = work.relative(bounds, b, 0);
+    let level = body.level(b);
+    let accel = work.accel(bounds, b, 0);
+    let u0 = speed(body, fa, pa, b, &work.twist_a[level]);
+    let u1 = speed(body, fb, pb, b, &work.twist_b[level]);
+    (
+        plain,
+        accel,
+        u0,
+        u1,
+        motion(1.0, plain, u0, u1, accel, 1.0 / accel),
+    )
+}
+
+/// Body `q`'s bound on how far it moves relative to the bodies of level `level` over the whole
+/// step, with its speed cap `plain` and acceleration bound `accel` for that level: `[bound, u0,
+/// u1]`.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn pair_bound(
+    work: &Work,
+    body: &RobotBody,
+    (fa, pa): (&Frames, &Placed),
+    (fb, pb): (&Frames, &Placed),
+    q: usize,
+    level: usize,
+    plain: f64,
+    accel: f64,
+) -> [f64; 3] {
+    let u0 = relative_speed(body, fa, pa, &work.twist_a, q, level);
+    let u1 = relative_speed(body, fb, pb, &work.twist_b, q, level);
+    [motion(1.0, plain, u0, u1, accel, 1.0 / accel), u0, u1]
+}
+
+/// What `certified` first tests of a step: a body against the environment, or a self pair,
+/// with the bound on how far the moving body can move over the whole step ([`step_bounds`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepBound {
+    /// The moving body.
+    pub body: usize,
+    /// For a self pair, its other body (at a level no deeper than `body`'s): the bound is on
+    /// `body`'s motion relative to the links of that body's level. `None` for `body` against
+    /// the environment (the bound is on its motion in the world).
+    pub relative_to: Option<usize>,
+    /// Bound on the path length of every point of `body` over the step.
+    pub bound: f64,
+}
+
+/// The motion bounds `certified` proves a whole step `from → to` with before it bisects: one
+/// per robot body (against the environment) and one per checked self pair. The step is proven
+/// at once for an item whose clearances at the two ends add up to more than its bound, and
+/// bisected otherwise. A diagnostic: comparing these bounds with path lengths measured densely
+/// along the step shows how much room the proof leaves (`examples/check_cost.rs`, mode
+/// `bounds`). Allocates; not for a hot loop.
+pub fn step_bounds(chain: &Chain, body: &RobotBody, from: &[f64], to: &[f64]) -> Vec<StepBound> {
+    let bounds = MotionBounds::new(chain, body);
+    let mut work = Work::default();
+    work.prepare(&bounds, body, from, to);
+    let (mut fa, mut fb) = (chain.frames(), chain.frames());
+    let (mut pa, mut pb) = (Placed::default(), Placed::default());
+    chain.fk(from, &mut fa);
+    chain.fk(to, &mut fb);
+    body.place(&fa, &mut pa);
+    body.place(&fb, &mut pb);
+    twists(&bounds, &fa, &work.delta, &mut work.twist_a);
+    twists(&bounds, &fb, &work.delta, &mut work.twist_b);
+    let (a, b) = ((&fa, &pa), (&fb, &pb));
+    let mut out: Vec<StepBound> = (0..body.len())
+        .map(|k| StepBound {
+            body: k,
+            relative_to: None,
+            bound: env_bound(&work, &bounds, body, a, b, k).4,
+        })
+        .collect();
+    for &(p, q) in body.self_pairs() {
+        let (p, q) = (p as usize, q as usize);
+        let level = body.level(p);
+        let plain = work.relative(&bounds, q, level);
+        let accel = work.accel(&bounds, q, level);
+        out.push(StepBound {
+            body: q,
+            relative_to: Some(p),
+            bound: pair_bound(&work, body, a, b, q, level, plain, accel)[0],
+        });
+    }
+    out
+}
+
 /// Margin added to the distance a capped clearance query must exceed, so that a capped answer
 /// proves the strict inequality it is asked for.
 const CAP_MARGIN: f64 = 1e-12;
@@ -731,12 +831,8 @@ impl EdgeChecker for Certified {
         // body. c1 > D proves the whole step; otherwise c0 > D − c1 does. From the tip: the
         // bodies that move most are the likeliest to block the step.
         for b in (0..body.len()).rev() {
-            let plain = work.relative(bounds, b, 0);
-            let level = body.level(b);
-            let accel = work.accel(bounds, b, 0);
-            let u0 = speed(body, fa, pa, b, &work.twist_a[level]);
-            let u1 = speed(body, fb, pb, b, &work.twist_b[level]);
-            let bound = motion(1.0, plain, u0, u1, accel, 1.0 / accel);
+            let (plain, accel, u0, u1, bound) =
+                env_bound(work, bounds, body, (fa, pa), (fb, pb), b);
             let (known0, exact0) = ka.clear[b];
             let (known1, exact1) = kb.clear[b];
             if known0 > bound {
@@ -831,9 +927,8 @@ impl EdgeChecker for Certified {
             let accel = work.accel(bounds, qb, level);
             let [mut bound, mut u0, mut u1] = work.bounds_at[qb];
             if bound.is_nan() {
-                u0 = relative_speed(body, fa, pa, &work.twist_a, qb, level);
-                u1 = relative_speed(body, fb, pb, &work.twist_b, qb, level);
-                bound = motion(1.0, plain, u0, u1, accel, 1.0 / accel);
+                [bound, u0, u1] =
+                    pair_bound(work, body, (fa, pa), (fb, pb), qb, level, plain, accel);
                 work.bounds_at[qb] = [bound, u0, u1];
             }
             let ball0 = (cp - cq).norm() - rp - rq;
