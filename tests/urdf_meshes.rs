@@ -25,6 +25,14 @@ fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
+/// The mesh arm's URDF text with every mesh reference (relative, or `package://meshes/`) made
+/// absolute (`abs`: the repository's `meshes/` folder, with its slash), for a copy written
+/// outside the repository: no folder above it need hold the meshes.
+fn absolute_meshes(text: &str, abs: &str) -> String {
+    text.replace("../../meshes/", abs)
+        .replace("package://meshes/", abs)
+}
+
 fn arm_urdf() -> PathBuf {
     root().join("examples/robots/mesh_arm.urdf")
 }
@@ -356,7 +364,7 @@ fn variant(dir: &Path, name: &str, from: &str, to: &str) -> PathBuf {
     assert!(text.contains(from), "{from}");
     let p = dir.join(name);
     let abs = format!("{}/meshes/", root().display());
-    std::fs::write(&p, text.replace(from, to).replace("../../meshes/", &abs)).unwrap();
+    std::fs::write(&p, absolute_meshes(&text.replace(from, to), &abs)).unwrap();
     p
 }
 
@@ -776,7 +784,7 @@ fn repeated_collision_elements_add_no_body() {
     let abs = format!("{}/meshes/", root().display());
     let write = |name: &str, text: String| {
         let p = dir.path().join(name);
-        std::fs::write(&p, text.replace("../../meshes/", &abs)).unwrap();
+        std::fs::write(&p, absolute_meshes(&text, &abs)).unwrap();
         p
     };
     let base = import(&write("base.urdf", text.clone()), &ImportOptions::default());
@@ -858,9 +866,10 @@ fn mesh_elements_share_one_hull_of_distinct_points() {
             )
         })
         .collect();
-    let text = text
-        .replace(mesh, &format!("{mesh}{copies}"))
-        .replace("../../meshes/", &format!("{}/meshes/", root().display()));
+    let text = absolute_meshes(
+        &text.replace(mesh, &format!("{mesh}{copies}")),
+        &format!("{}/meshes/", root().display()),
+    );
     let p = dir.path().join("many.urdf");
     std::fs::write(&p, text).unwrap();
     let robot = import(&p, &ImportOptions::default());
