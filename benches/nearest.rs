@@ -1,11 +1,12 @@
-//! Nearest neighbour in actuation space: the planner's linear scan against a k-d tree (kiddo),
-//! at the dimensions of the paper's chains (8 and 24 axes) and tree sizes an RRT reaches.
+//! Nearest neighbour in actuation space: the linear scan, the planner's scan of four nodes at a
+//! time (`blocked`, the same answers) and a k-d tree (kiddo), at the dimensions of the paper's
+//! chains (8 and 24 axes) and tree sizes an RRT reaches.
 //! Each measurement is one query on a tree of the given size (the k-d tree's insertions, which
 //! an RRT also pays for, come on top).
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use kiddo::{KdTree, SquaredEuclidean};
-use kinsynth::planning::rrt::nearest_linear;
+use kinsynth::planning::rrt::{block_push, nearest_blocked, nearest_linear};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::hint::black_box;
@@ -30,6 +31,16 @@ fn compare<const K: usize>(c: &mut Criterion) {
             b.iter(|| {
                 i = (i + 1) % queries.len();
                 black_box(nearest_linear(&flat, &queries[i]))
+            })
+        });
+        let mut blocks = Vec::new();
+        for (k, p) in pts.iter().enumerate() {
+            block_push(&mut blocks, k, p);
+        }
+        group.bench_with_input(BenchmarkId::new("blocked", n), &n, |b, _| {
+            b.iter(|| {
+                i = (i + 1) % queries.len();
+                black_box(nearest_blocked(&blocks, &queries[i]))
             })
         });
         let mut tree: KdTree<f64, K> = KdTree::new();

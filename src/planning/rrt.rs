@@ -34,6 +34,9 @@ pub struct Tree {
     dof: usize,
     links: usize,
     configs: Vec<f64>,
+    /// The configurations again, transposed in blocks of [`LANES`] nodes for the nearest-node
+    /// scan ([`nearest_blocked`]); a last block's unused lanes hold NaN.
+    blocks: Vec<f64>,
     positions: Vec<Point3<f64>>,
     ee: Vec<Point3<f64>>,
     rot: Vec<Matrix3<f64>>,
@@ -46,6 +49,7 @@ impl Tree {
             dof: chain.dof(),
             links: chain.position_count(),
             configs: Vec::new(),
+            blocks: Vec::new(),
             positions: Vec::new(),
             ee: Vec::new(),
             rot: Vec::new(),
@@ -55,6 +59,7 @@ impl Tree {
 
     fn push(&mut self, q: &[f64], frames: &Frames, parent: u32) -> u32 {
         self.configs.extend_from_slice(q);
+        block_push(&mut self.blocks, self.parent.len(), q);
         self.positions.extend_from_slice(&frames.positions);
         self.ee.push(frames.end_effector());
         self.rot.push(*frames.tcp_rotation());
@@ -65,6 +70,7 @@ impl Tree {
     /// Empties the tree, keeping its buffers.
     fn clear(&mut self) {
         self.configs.clear();
+        self.blocks.clear();
         self.positions.clear();
         self.ee.clear();
         self.rot.clear();
@@ -77,6 +83,9 @@ impl Tree {
     fn graft(&mut self, other: &Tree, at: u32, onto: u32) -> u32 {
         let offset = self.len() as u32;
         self.configs.extend_from_slice(&other.configs);
+        for (i, q) in other.configs.chunks_exact(self.dof.max(1)).enumerate() {
+            block_push(&mut self.blocks, offset as usize + i, q);
+        }
         self.positions.extend_from_slice(&other.positions);
         self.ee.extend_from_slice(&other.ee);
         self.rot.extend_from_slice(&other.rot);
@@ -146,10 +155,13 @@ impl Tree {
         out
     }
 
-    /// Nearest node to `q` in actuation space (Euclidean), by linear scan; see
-    /// [`nearest_linear`].
+    /// Nearest node to `q` in actuation space (Euclidean), by linear scan: the node
+    /// [`nearest_linear`] finds, [`LANES`] nodes at a time ([`nearest_blocked`]).
     pub fn nearest_config(&self, q: &[f64]) -> u32 {
-        nearest_linear(&self.configs, q) as u32
+        if self.dof == 0 {
+            return 0;
+        }
+        nearest_blocked(&self.blocks, q) as u32
     }
 
     /// Node whose end effector is nearest to `p`.
@@ -168,31 +180,130 @@ impl Tree {
 /// Index of the point of `points` (flat, `q.len()` values per point) nearest to `q`
 /// (squared Euclidean), by linear scan; 0 for an empty set.
 ///
-/// Measured against a k-d tree (kiddo) by `benches/nearest.rs`; see the README for the figures
+/// Measured against the planner's scan of four nodes at a time ([`nearest_blocked`], the same
+/// answers) and a k-d tree (kiddo) by `benches/nearest.rs`; see the README for the figures
 /// and the choice.
 pub fn nearest_linear(points: &[f64], q: &[f64]) -> usize {
     let dim = q.len().max(1);
     let mut best = (f64::INFINITY, 0);
     for (i, c) in points.chunks_exact(dim).enumerate() {
-        // Four independent partial sums let the additions overlap in the pipeline.
-        let mut acc = [0.0f64; 4];
-        let mut quads = c.chunks_exact(4).zip(q.chunks_exact(4));
-        for (a, b) in &mut quads {
-            for l in 0..4 {
-                let d = a[l] - b[l];
-                acc[l] += d * d;
-            }
-        }
-        let tail = dim - dim % 4;
-        for (a, b) in c[tail..].iter().zip(&q[tail..]) {
-            acc[0] += (a - b) * (a - b);
-        }
-        let d = (acc[0] + acc[1]) + (acc[2] + acc[3]);
+        let d = squared_distance(c, q);
         if d < best.0 {
             best = (d, i);
         }
     }
     best.1
+}
+
+/// The squared Euclidean distance of the nearest-node scans, summed in their order: four
+/// partial sums over the axes `4m + l` of the first `dim − dim % 4` axes (independent, so that
+/// the additions overlap in the pipeline), the remaining axes added to the first, then
+/// `(s0 + s1) + (s2 + s3)`.
+#[inline(always)]
+pub fn squared_distance(c: &[f64], q: &[f64]) -> f64 {
+    let dim = q.len();
+    let mut acc = [0.0f64; 4];
+    let mut quads = c.chunks_exact(4).zip(q.chunks_exact(4));
+    for (a, b) in &mut quads {
+        for l in 0..4 {
+            let d = a[l] - b[l];
+            acc[l] += d * d;
+        }
+    }
+    let tail = dim - dim % 4;
+    for (a, b) in c[tail..].iter().zip(&q[tail..]) {
+        acc[0] += (a - b) * (a - b);
+    }
+    (acc[0] + acc[1]) + (acc[2] + acc[3])
+}
+
+/// Nodes per block of [`nearest_blocked`]'s transposed layout.
+pub const LANES: usize = 4;
+
+/// Writes node `index`'s configuration `q` into the transposed blocks `blocks` (block
+/// `index / LANES`, axis `k`, lane `index % LANES` at `(block·dim + k)·LANES + lane`),
+/// appending a block of NaN when `index` starts one. Nodes are written in index order.
+pub fn block_push(blocks: &mut Vec<f64>, index: usize, q: &[f64]) {
+    let dim = q.len();
+    let (block, lane) = (index / LANES, index % LANES);
+    if lane == 0 {
+        blocks.resize((block + 1) * dim * LANES, f64::NAN);
+    }
+    let base = block * dim * LANES;
+    for (k, &v) in q.iter().enumerate() {
+        blocks[base + k * LANES + lane] = v;
+    }
+}
+
+/// The index [`nearest_linear`] returns, from the transposed blocks of [`block_push`] (the
+/// nodes' configurations, `q.len()` values each): the same sums of squares in the same order,
+/// computed for [`LANES`] nodes at once (a vector lane per node, no sum across lanes), so the
+/// same node bit for bit, the first of the nearest. 0 for no node.
+pub fn nearest_blocked(blocks: &[f64], q: &[f64]) -> usize {
+    #[cfg(target_arch = "x86_64")]
+    if std::is_x86_feature_detected!("avx2") {
+        // SAFETY: the processor supports AVX2 (just checked).
+        return unsafe { nearest_blocked_avx2(blocks, q) }.0;
+    }
+    nearest_blocked_by(blocks, q).0
+}
+
+/// [`nearest_blocked`] compiled for AVX2 (four lanes in one register).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn nearest_blocked_avx2(blocks: &[f64], q: &[f64]) -> (usize, f64) {
+    nearest_blocked_by(blocks, q)
+}
+
+/// The scan of [`nearest_blocked`], with the nearest node's squared distance: per lane the
+/// sum of [`squared_distance`] in its order; a lane's best changes only on a smaller sum, and
+/// the lanes' bests are merged by sum, then by index.
+#[inline(always)]
+fn nearest_blocked_by(blocks: &[f64], q: &[f64]) -> (usize, f64) {
+    let dim = q.len().max(1);
+    let quads = q.len() - q.len() % 4;
+    let mut best = [f64::INFINITY; LANES];
+    // Node indices as f64 (exact below 2^53), so that the update is one select per lane.
+    let mut at = [0.0f64; LANES];
+    let sq = |axis: &[f64], x: f64, acc: &mut [f64; LANES]| {
+        for (a, &v) in acc.iter_mut().zip(axis) {
+            let d = v - x;
+            *a += d * d;
+        }
+    };
+    for (b, block) in blocks.chunks_exact(dim * LANES).enumerate() {
+        let (mut s0, mut s1, mut s2, mut s3) =
+            ([0.0f64; LANES], [0.0; LANES], [0.0; LANES], [0.0; LANES]);
+        let (head, tail) = block.split_at(quads * LANES);
+        for (axes, xs) in head.chunks_exact(4 * LANES).zip(q.chunks_exact(4)) {
+            sq(&axes[..LANES], xs[0], &mut s0);
+            sq(&axes[LANES..2 * LANES], xs[1], &mut s1);
+            sq(&axes[2 * LANES..3 * LANES], xs[2], &mut s2);
+            sq(&axes[3 * LANES..], xs[3], &mut s3);
+        }
+        for (axis, &x) in tail.chunks_exact(LANES).zip(&q[quads..]) {
+            sq(axis, x, &mut s0);
+        }
+        let first = (b * LANES) as f64;
+        for lane in 0..LANES {
+            let d = (s0[lane] + s1[lane]) + (s2[lane] + s3[lane]);
+            let closer = d < best[lane];
+            best[lane] = if closer { d } else { best[lane] };
+            at[lane] = if closer {
+                first + lane as f64
+            } else {
+                at[lane]
+            };
+        }
+    }
+    let mut winner = (f64::INFINITY, 0usize);
+    for (&d, &i) in best.iter().zip(&at) {
+        let i = i as usize;
+        if d < winner.0 || (d == winner.0 && i < winner.1) {
+            winner = (d, i);
+        }
+    }
+    (winner.1, winner.0)
 }
 
 /// What one RRT run produced.
@@ -851,6 +962,52 @@ mod tests {
         }
     }
 
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(300))]
+        /// The scan four nodes at a time returns exactly the index the linear scan returns (the
+        /// first of the nearest), at every dimension from 1 to 30, for every tree size (a last
+        /// block part empty), with repeated points and queries on a point.
+        #[test]
+        fn nearest_blocked_is_the_linear_scan(
+            dim in 1usize..31,
+            n in 0usize..150,
+            seed in any::<u64>(),
+        ) {
+            use rand::SeedableRng;
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            // Coarse values for half the seeds, so that sums tie often; else any.
+            let mut points: Vec<f64> = (0..n * dim)
+                .map(|_| match seed % 2 {
+                    0 => f64::from(rng.random_range(-4i32..5)) * 0.5,
+                    _ => rng.random_range(-3.0..3.0),
+                })
+                .collect();
+            for k in (dim..points.len()).step_by(5 * dim) {
+                let (head, rest) = points.split_at_mut(k);
+                rest[..dim].copy_from_slice(&head[k - dim..k]);
+            }
+            let q: Vec<f64> = if n > 0 && seed % 3 == 0 {
+                points[(n / 2) * dim..(n / 2 + 1) * dim].to_vec()
+            } else {
+                (0..dim).map(|_| rng.random_range(-3.0..3.0)).collect()
+            };
+            let mut blocks = Vec::new();
+            for (i, p) in points.chunks_exact(dim).enumerate() {
+                block_push(&mut blocks, i, p);
+            }
+            prop_assert_eq!(blocks.len(), n.div_ceil(LANES) * LANES * dim);
+            let linear = nearest_linear(&points, &q);
+            prop_assert_eq!(nearest_blocked(&blocks, &q), linear);
+            let (i, d) = nearest_blocked_by(&blocks, &q);
+            prop_assert_eq!(i, linear);
+            // The same sum bit for bit (what near ties are decided on).
+            if n > 0 {
+                let sum = squared_distance(&points[i * dim..(i + 1) * dim], &q);
+                prop_assert_eq!(d.to_bits(), sum.to_bits());
+            }
+        }
+    }
+
     /// A planar arm of two unit links turning about z.
     fn arm() -> Chain {
         let mut r = [Range::ZERO; 6];
@@ -872,6 +1029,43 @@ mod tests {
         let mut frames = chain.frames();
         chain.fk(q, &mut frames);
         tree.push(q, &frames, parent)
+    }
+
+    #[test]
+    fn the_nearest_node_of_a_grown_grafted_and_cleared_tree_is_the_linear_scans() {
+        use rand::SeedableRng;
+        let chain = arm();
+        let mut rng = ChaCha8Rng::seed_from_u64(4);
+        let mut q = [0.0; 2];
+        let mut grow = |tree: &mut Tree, n: usize, rng: &mut ChaCha8Rng| {
+            for _ in 0..n {
+                chain.sample_config(rng, &mut q);
+                let parent = tree.len().saturating_sub(1) as u32;
+                push(tree, &chain, &q, parent);
+            }
+        };
+        let check = |tree: &Tree, rng: &mut ChaCha8Rng| {
+            for _ in 0..50 {
+                let x = [rng.random_range(-3.0..3.0), rng.random_range(-3.0..3.0)];
+                assert_eq!(
+                    tree.nearest_config(&x) as usize,
+                    nearest_linear(&tree.configs, &x)
+                );
+            }
+            assert_eq!(tree.blocks.len(), tree.len().div_ceil(LANES) * LANES * 2);
+        };
+        let (mut main, mut other) = (Tree::new(&chain), Tree::new(&chain));
+        grow(&mut main, 7, &mut rng);
+        grow(&mut other, 6, &mut rng);
+        check(&main, &mut rng);
+        main.graft(&other, 3, 2);
+        check(&main, &mut rng);
+        grow(&mut main, 9, &mut rng);
+        check(&main, &mut rng);
+        main.clear();
+        assert_eq!(main.nearest_config(&[0.5, 0.5]), 0);
+        grow(&mut main, 5, &mut rng);
+        check(&main, &mut rng);
     }
 
     #[test]
