@@ -154,17 +154,15 @@ fn main() {
 /// the step's two ends prove with that bound and would prove with the measured length.
 fn bounds(s: &Scenario, substeps: usize) {
     use kinsynth::collision::edge::certified::step_bounds;
-    use nalgebra::IsometryMatrix3;
+    use kinsynth::collision::oracle::travel;
     let chain = s.space.largest().chain();
     let scene = Arc::new(CollisionScene::new(&s.workspace));
     let body = kinsynth::collision::RobotBody::of_chain(&chain);
     let l_max = std::f64::consts::FRAC_PI_4;
     let edges = sample_edges(&scene, &chain, &body, l_max, s.planner.lambda, 256, 7);
-    let substeps = substeps.max(1);
-    let (mut fa, mut fb, mut f) = (chain.frames(), chain.frames(), chain.frames());
+    let (mut fa, mut fb) = (chain.frames(), chain.frames());
     let mut pa = kinsynth::collision::body::Placed::default();
     let mut pb = pa.clone();
-    let mut q = vec![0.0; chain.dof()];
     // Per kind (against the environment, self pair): items, the sum of bound / length, items
     // proven by the bound, items the measured length would prove.
     let mut rows = [[0.0f64; 4]; 2];
@@ -185,36 +183,13 @@ fn bounds(s: &Scenario, substeps: usize) {
         chain.fk(b, &mut fb);
         body.place(&fa, &mut pa);
         body.place(&fb, &mut pb);
-        let items: Vec<_> = step_bounds(&chain, &body, a, b)
-            .into_iter()
-            .filter(|it| it.body < body.segments())
-            .collect();
-        // Per item, the path lengths of the core's two ends, and their last positions.
-        let mut length = vec![[0.0f64; 2]; items.len()];
-        let mut last: Vec<Option<[nalgebra::Point3<f64>; 2]>> = vec![None; items.len()];
-        for k in 0..=substeps {
-            let t = k as f64 / substeps as f64;
-            for ((qi, x), y) in q.iter_mut().zip(a).zip(b) {
-                *qi = x + t * (y - x);
-            }
-            chain.fk(&q, &mut f);
-            for (i, it) in items.iter().enumerate() {
-                let inv = match it.relative_to.map_or(0, |p| body.level(p)) {
-                    0 => IsometryMatrix3::identity(),
-                    l => f.axis_frames[l - 1].inverse(),
-                };
-                let ends = f.segments[it.body].map(|p| inv * p);
-                if let Some(before) = last[i] {
-                    for ((len, now), was) in length[i].iter_mut().zip(ends).zip(before) {
-                        *len += (now - was).norm();
-                    }
-                }
-                last[i] = Some(ends);
-            }
-        }
+        let items = step_bounds(&chain, &body, a, b);
+        let length = travel(&chain, &body, a, b, &items, substeps);
         let mut whole = [true; 3];
-        for (it, len) in items.iter().zip(&length) {
-            let len = len[0].max(len[1]);
+        for (it, len) in items.iter().zip(length) {
+            let Some(len) = len else {
+                continue; // a solid: no core to follow
+            };
             let (c0, c1) = match it.relative_to {
                 None => (clearance(&fa, &pa, it.body), clearance(&fb, &pb, it.body)),
                 Some(p) => (

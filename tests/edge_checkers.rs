@@ -210,12 +210,11 @@ fn certified_step_bounds_hold_along_dense_steps() {
     // really travel (relative to the pair's other body for a self pair), measured densely; a
     // step that does not move has bounds of 0.
     use kinsynth::collision::edge::certified::step_bounds;
+    use kinsynth::collision::oracle::travel;
     let s = Scenario::from_spec(&generate(Preset::Paper3d, 6)).unwrap();
     let chain = s.space.largest().chain();
     let scene = CollisionScene::new(&s.workspace);
     let body = kinsynth::collision::RobotBody::of_chain(&chain);
-    let mut f = chain.frames();
-    let mut q = vec![0.0; chain.dof()];
     let (mut pairs, mut tightest) = (0, 0.0f64);
     for (a, b) in sample_edges(&scene, &chain, &body, PI / 4.0, 0.1, 12, 5) {
         let items = step_bounds(&chain, &body, &a, &b);
@@ -223,31 +222,9 @@ fn certified_step_bounds_hold_along_dense_steps() {
         assert!(step_bounds(&chain, &body, &a, &a)
             .iter()
             .all(|it| it.bound == 0.0));
-        let mut length = vec![[0.0f64; 2]; items.len()];
-        let mut last: Vec<Option<[Point3<f64>; 2]>> = vec![None; items.len()];
-        let n = 300;
-        for k in 0..=n {
-            let t = k as f64 / n as f64;
-            for ((qi, x), y) in q.iter_mut().zip(&a).zip(&b) {
-                *qi = x + t * (y - x);
-            }
-            chain.fk(&q, &mut f);
-            for (i, it) in items.iter().enumerate() {
-                let inv = match it.relative_to.map_or(0, |p| body.level(p)) {
-                    0 => nalgebra::IsometryMatrix3::identity(),
-                    l => f.axis_frames[l - 1].inverse(),
-                };
-                let ends = f.segments[it.body].map(|p| inv * p);
-                if let Some(before) = last[i] {
-                    for ((len, now), was) in length[i].iter_mut().zip(ends).zip(before) {
-                        *len += (now - was).norm();
-                    }
-                }
-                last[i] = Some(ends);
-            }
-        }
-        for (it, len) in items.iter().zip(&length) {
-            let len = len[0].max(len[1]);
+        let length = travel(&chain, &body, &a, &b, &items, 300);
+        for (it, len) in items.iter().zip(length) {
+            let len = len.expect("a capsule");
             assert!(
                 len <= it.bound * (1.0 + 1e-9),
                 "{it:?}: the core travels {len}"

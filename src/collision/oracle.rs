@@ -3,8 +3,10 @@
 //! reports only; the planner never uses it.
 
 use super::body::{Placed, RobotBody};
+use super::edge::certified::StepBound;
 use super::scene::CollisionScene;
 use crate::kinematics::{step_length, Chain};
+use nalgebra::{IsometryMatrix3, Point3};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
@@ -223,4 +225,53 @@ pub fn agreement(
         seconds_per_edge: seconds / edges.len().max(1) as f64,
         fk_per_edge: scratch.stats.fk as f64 / edges.len().max(1) as f64,
     }
+}
+
+/// How far the capsule core of each item's body travels along the straight step `from → to`,
+/// measured with `substeps` steps: the larger of its two ends' path lengths, in the world for
+/// an item against the environment and relative to the links of the other body's level for a
+/// self pair; `None` for a solid body. The dense measurement that `certified`'s motion bounds
+/// ([`crate::collision::edge::certified::step_bounds`]) are compared with. Allocates.
+pub fn travel(
+    chain: &Chain,
+    body: &RobotBody,
+    from: &[f64],
+    to: &[f64],
+    items: &[StepBound],
+    substeps: usize,
+) -> Vec<Option<f64>> {
+    let substeps = substeps.max(1);
+    let mut frames = chain.frames();
+    let mut q = vec![0.0; from.len()];
+    // Per item, the path lengths of the core's two ends, and their last positions.
+    let mut length = vec![[0.0f64; 2]; items.len()];
+    let mut last: Vec<Option<[Point3<f64>; 2]>> = vec![None; items.len()];
+    for k in 0..=substeps {
+        let t = k as f64 / substeps as f64;
+        for ((qi, a), b) in q.iter_mut().zip(from).zip(to) {
+            *qi = a + t * (b - a);
+        }
+        chain.fk(&q, &mut frames);
+        for (i, it) in items.iter().enumerate() {
+            if it.body >= body.segments() {
+                continue;
+            }
+            let inv = match it.relative_to.map_or(0, |p| body.level(p)) {
+                0 => IsometryMatrix3::identity(),
+                l => frames.axis_frames[l - 1].inverse(),
+            };
+            let ends = frames.segments[it.body].map(|p| inv * p);
+            if let Some(before) = last[i] {
+                for ((len, now), was) in length[i].iter_mut().zip(ends).zip(before) {
+                    *len += (now - was).norm();
+                }
+            }
+            last[i] = Some(ends);
+        }
+    }
+    items
+        .iter()
+        .zip(length)
+        .map(|(it, [a, b])| (it.body < body.segments()).then_some(a.max(b)))
+        .collect()
 }

@@ -24,7 +24,7 @@
 //! gives such a design `R = 0`.
 
 use super::model::{Placed, RobotBody};
-use crate::kinematics::Chain;
+use crate::kinematics::{Chain, Frames};
 use nalgebra::Point3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -123,6 +123,74 @@ struct Group {
     bodies: Vec<usize>,
 }
 
+/// Which pairs of body groups are in contact at a configuration: every body pair of the
+/// groups listed ([`Contacts::list`]), culled by bounding balls, then measured exactly, pairs
+/// of capsules four at a time on vector lanes (the same values as one by one). Buffers reused
+/// from one configuration to the next.
+#[derive(Default)]
+struct Contacts {
+    /// Per body pair of the listed group pairs: (group pair, body, body).
+    pairs: Vec<(usize, u32, u32)>,
+    /// Those whose balls meet at the configuration measured last.
+    near: Vec<(usize, u32, u32)>,
+    /// Per listed group pair: in contact at the configuration measured last.
+    hit: Vec<bool>,
+}
+
+impl Contacts {
+    /// Lists the body pairs of the group pairs `(i, j)` of `groups`, numbered in order.
+    fn list(&mut self, groups: &[Group], group_pairs: impl Iterator<Item = (usize, usize)>) {
+        self.pairs.clear();
+        for (k, (i, j)) in group_pairs.enumerate() {
+            for &p in &groups[i].bodies {
+                for &q in &groups[j].bodies {
+                    self.pairs.push((k, p as u32, q as u32));
+                }
+            }
+        }
+    }
+
+    /// Fills `hit` for the `count` listed group pairs at the configuration of `frames`,
+    /// `placed` and `balls`: a group pair is in contact when one of its body pairs' balls meet
+    /// and their distance is `≤ 0`.
+    fn measure(
+        &mut self,
+        body: &RobotBody,
+        frames: &Frames,
+        placed: &Placed,
+        balls: &[(Point3<f64>, f64)],
+        count: usize,
+    ) {
+        // Without a branch per pair: every pair is written, and kept when its balls meet.
+        self.near.resize(self.pairs.len(), (0, 0, 0));
+        let mut kept = 0;
+        for &(k, p, q) in &self.pairs {
+            let ((cp, rp), (cq, rq)) = (balls[p as usize], balls[q as usize]);
+            let gap = rp + rq;
+            self.near[kept] = (k, p, q);
+            kept += usize::from((cp - cq).norm_squared() <= gap * gap);
+        }
+        self.near.truncate(kept);
+        self.hit.clear();
+        self.hit.resize(count, false);
+        for block in self.near.chunks(4) {
+            let pair = |i: usize| {
+                let (_, p, q) = block[i.min(block.len() - 1)];
+                (p, q)
+            };
+            let batch = [pair(0), pair(1), pair(2), pair(3)];
+            let d = body
+                .capsule_pair_distances(frames, batch)
+                .unwrap_or_else(|| {
+                    batch.map(|(p, q)| body.pair_distance(frames, placed, p as usize, q as usize))
+                });
+            for (&(k, _, _), d) in block.iter().zip(d) {
+                self.hit[k] |= d <= 0.0;
+            }
+        }
+    }
+}
+
 impl AllowedCollisions {
     /// The frame pairs never checked, with their reasons, in chain order.
     pub fn disabled(&self) -> &[DisabledPair] {
@@ -194,46 +262,35 @@ impl AllowedCollisions {
         chain.fk(chain.home(), &mut frames);
         body.place(&frames, &mut placed);
         body.balls(&frames, &placed, &mut balls);
-        // Contact between two groups; bounding balls (`balls`, of the same configuration)
-        // cull pairs that are clearly apart.
-        let contact = |frames: &_, placed: &_, balls: &[(Point3<f64>, f64)], i: usize, j: usize| {
-            groups[i].bodies.iter().any(|&p| {
-                let (cp, rp) = balls[p];
-                groups[j].bodies.iter().any(|&q| {
-                    let (cq, rq) = balls[q];
-                    let gap = rp + rq;
-                    (cp - cq).norm_squared() <= gap * gap
-                        && body.pair_distance(frames, placed, p, q) <= 0.0
-                })
-            })
-        };
+        let mut contacts = Contacts::default();
         // A contact at home disables the pair ("Default"), unless it is a fold: then the pair
         // stays enabled (and out of "Always"), so that the SRDF and every checker see the home
         // pose in collision, as the planner does.
         let mut home_fold = None;
         let mut folded = vec![false; n * n];
-        for i in 0..n {
-            for j in i + 1..n {
-                if reason[idx(i, j)].is_some() || !contact(&frames, &placed, &balls, i, j) {
-                    continue;
+        let open: Vec<(usize, usize)> = (0..n)
+            .flat_map(|i| (i + 1..n).map(move |j| (i, j)))
+            .filter(|&(i, j)| reason[idx(i, j)].is_none())
+            .collect();
+        contacts.list(&groups, open.iter().copied());
+        contacts.measure(body, &frames, &placed, &balls, open.len());
+        for (&(i, j), _) in open.iter().zip(&contacts.hit).filter(|(_, &h)| h) {
+            let fold = groups[i].bodies.iter().find_map(|&p| {
+                groups[j].bodies.iter().find_map(|&q| {
+                    let apart = body.link(p).abs_diff(body.link(q)) >= 2;
+                    (apart
+                        && body
+                            .core_distance(&frames, p, q)
+                            .is_some_and(|d| d <= FOLD_TOLERANCE))
+                    .then(|| (body.link(p), body.link(q)))
+                })
+            });
+            match fold {
+                Some(links) => {
+                    folded[idx(i, j)] = true;
+                    home_fold.get_or_insert(links);
                 }
-                let fold = groups[i].bodies.iter().find_map(|&p| {
-                    groups[j].bodies.iter().find_map(|&q| {
-                        let apart = body.link(p).abs_diff(body.link(q)) >= 2;
-                        (apart
-                            && body
-                                .core_distance(&frames, p, q)
-                                .is_some_and(|d| d <= FOLD_TOLERANCE))
-                        .then(|| (body.link(p), body.link(q)))
-                    })
-                });
-                match fold {
-                    Some(links) => {
-                        folded[idx(i, j)] = true;
-                        home_fold.get_or_insert(links);
-                    }
-                    None => reason[idx(i, j)] = Some(Reason::Default),
-                }
+                None => reason[idx(i, j)] = Some(Reason::Default),
             }
         }
         // "Always": candidates are the pairs still enabled and moving relative to each other.
@@ -253,11 +310,7 @@ impl AllowedCollisions {
         if samples > 0 && chain.dof() > 0 && !candidates.is_empty() {
             let mut rng = ChaCha8Rng::seed_from_u64(config.seed);
             let mut q = vec![0.0; chain.dof()];
-            // The body pairs of the candidates (with their candidate), rebuilt when a
-            // candidate drops out; per sample, those whose bounding balls meet.
-            let mut pairs: Vec<(usize, u32, u32)> = Vec::new();
-            let mut near: Vec<(usize, u32, u32)> = Vec::new();
-            let mut hit: Vec<bool> = Vec::new();
+            // The candidates' body pairs are listed again only when a candidate drops out.
             let mut listed = usize::MAX;
             for _ in 0..samples {
                 if candidates.is_empty() {
@@ -265,51 +318,14 @@ impl AllowedCollisions {
                 }
                 if listed != candidates.len() {
                     listed = candidates.len();
-                    pairs.clear();
-                    for (k, c) in candidates.iter().enumerate() {
-                        for &p in &groups[c.0].bodies {
-                            for &q in &groups[c.1].bodies {
-                                pairs.push((k, p as u32, q as u32));
-                            }
-                        }
-                    }
+                    contacts.list(&groups, candidates.iter().map(|c| (c.0, c.1)));
                 }
                 chain.sample_config(&mut rng, &mut q);
                 chain.fk(&q, &mut frames);
                 body.place(&frames, &mut placed);
                 body.balls(&frames, &placed, &mut balls);
-                // The same test as `contact`, with the exact distances of pairs of capsules
-                // measured four at a time (the same values as one by one). Without a branch
-                // per pair: every pair is written, and kept when its balls meet.
-                near.resize(pairs.len(), (0, 0, 0));
-                let mut kept = 0;
-                for &(k, p, q) in &pairs {
-                    let ((cp, rp), (cq, rq)) = (balls[p as usize], balls[q as usize]);
-                    let gap = rp + rq;
-                    near[kept] = (k, p, q);
-                    kept += usize::from((cp - cq).norm_squared() <= gap * gap);
-                }
-                near.truncate(kept);
-                hit.clear();
-                hit.resize(candidates.len(), false);
-                for block in near.chunks(4) {
-                    let pair = |i: usize| {
-                        let (_, p, q) = block[i.min(block.len() - 1)];
-                        (p, q)
-                    };
-                    let batch = [pair(0), pair(1), pair(2), pair(3)];
-                    let d = body
-                        .capsule_pair_distances(&frames, batch)
-                        .unwrap_or_else(|| {
-                            batch.map(|(p, q)| {
-                                body.pair_distance(&frames, &placed, p as usize, q as usize)
-                            })
-                        });
-                    for (&(k, _, _), d) in block.iter().zip(d) {
-                        hit[k] |= d <= 0.0;
-                    }
-                }
-                for (c, &h) in candidates.iter_mut().zip(&hit) {
+                contacts.measure(body, &frames, &placed, &balls, candidates.len());
+                for (c, &h) in candidates.iter_mut().zip(&contacts.hit) {
                     if h {
                         c.2 += 1;
                     } else {
