@@ -924,6 +924,14 @@ impl EdgeChecker for Certified {
             if (cp - cq).norm_squared() > gap * gap {
                 continue;
             }
+            // Both ends' balls against the speed cap (at least the bound) prove about half of
+            // the rest without the end speeds the bound needs.
+            let ball0 = (cp - cq).norm() - rp - rq;
+            let ((cp, rp), (cq, rq)) = (kb.balls[p], kb.balls[qb]);
+            let ball1 = (cp - cq).norm() - rp - rq;
+            if ball0 + ball1 > plain {
+                continue;
+            }
             let accel = work.accel(bounds, qb, level);
             let [mut bound, mut u0, mut u1] = work.bounds_at[qb];
             if bound.is_nan() {
@@ -931,13 +939,7 @@ impl EdgeChecker for Certified {
                     pair_bound(work, body, (fa, pa), (fb, pb), qb, level, plain, accel);
                 work.bounds_at[qb] = [bound, u0, u1];
             }
-            let ball0 = (cp - cq).norm() - rp - rq;
-            if ball0 > bound {
-                continue;
-            }
-            let ((cp, rp), (cq, rq)) = (kb.balls[p], kb.balls[qb]);
-            let ball1 = (cp - cq).norm() - rp - rq;
-            if ball0 + ball1 > bound {
+            if ball0 > bound || ball0 + ball1 > bound {
                 continue;
             }
             // The distances of the pair's block of self pairs, measured at once the first
