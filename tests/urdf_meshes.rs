@@ -891,7 +891,7 @@ fn mesh_elements_share_one_hull_of_distinct_points() {
 
 /// `reach --write-srdf` writes the pairs the run did not check, for the imported arm under its
 /// own frame names: the computed matrix plus the pairs of `--srdf`, with the URDF's base and tip
-/// as the planning group; reading it back (as `--srdf`) checks exactly the same pairs. A path
+/// as the planning group and its robot name; reading it back (as `--srdf`) checks exactly the same pairs. A path
 /// shared with `--json`, and capsule bodies on frames the URDF does not have, fail before
 /// anything is written.
 #[test]
@@ -918,6 +918,8 @@ fn reach_writes_the_srdf_of_the_pairs_it_checked() {
     assert!(ok, "{err}");
     assert!(stdout.contains("checked.srdf"), "{stdout}");
     let text = std::fs::read_to_string(&out).unwrap();
+    // Named as the URDF names its robot, not after the file (MoveIt requires the same name).
+    assert!(text.contains("<robot name=\"mesh_arm\">"), "{text}");
     let body = import_with_srdf(&urdf, given);
     assert!(text.contains(&format!(
         "<chain base_link=\"{}\" tip_link=\"{}\"/>",

@@ -40,7 +40,9 @@ pub struct Args {
     pub tree: bool,
     /// Write the SRDF of the self pairs this run checks (atomically): the allowed-collision
     /// matrix computed for the robot, with the pairs of --srdf for a URDF robot. With the URDF
-    /// it lets MoveIt, or pinocchio and coal, check exactly the pairs kinsynth checked.
+    /// it lets MoveIt, or pinocchio and coal, check exactly the pairs kinsynth checked. The
+    /// robot is named as in the --urdf file (MoveIt requires the same name), or for a design
+    /// after the file, as `kinsynth urdf` names the URDF it exports.
     #[arg(long)]
     pub write_srdf: Option<PathBuf>,
     #[command(flatten)]
@@ -94,8 +96,8 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         (Some(p), None, None) => kinsynth::optimize::runner::Replay::from_best(p)?,
         _ => None,
     };
-    // `group`: the SRDF's planning group, an imported robot's own base and tip frames (none:
-    // the exported design's).
+    // `group`: the SRDF's planning group, an imported robot's own base and tip frames, and
+    // its URDF robot name (none: the exported design's group, the robot named after the file).
     let (chain, urdf_names, body, group) = match urdf.robot.load(&s)? {
         Some(r) => {
             if let (Some(path), Some(why)) = (&write_srdf, r.srdf_cannot_name()) {
@@ -108,7 +110,7 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
             }
             urdf.robot.announce(&r);
             let body = std::sync::Arc::new(r.body);
-            let group = Some((r.urdf.base, r.urdf.tip));
+            let group = Some((r.urdf.base, r.urdf.tip, r.urdf.robot));
             (r.urdf.chain, Some(r.urdf.joint_names), Some(body), group)
         }
         None => match &design {
@@ -251,10 +253,11 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
                 &built
             }
         };
+        let name = group.as_ref().map(|(_, _, name)| name.as_str());
         let group = group
             .as_ref()
-            .map(|(base, tip)| (base.as_str(), tip.as_str()));
-        kinsynth::export::srdf::write_body_srdf(checked, group, path)?;
+            .map(|(base, tip, _)| (base.as_str(), tip.as_str()));
+        kinsynth::export::srdf::write_body_srdf(checked, group, name, path)?;
         say!(
             "wrote {} ({} pairs never checked)",
             path.display(),

@@ -47,7 +47,7 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
     kinsynth::io::check_output_file(&srdf)?;
     kinsynth::export::write_urdf(&d, &output)?;
     let body = kinsynth::collision::RobotBody::capsules(&d.chain(), &config);
-    kinsynth::export::srdf::write_body_srdf(&body, None, &srdf)?;
+    kinsynth::export::srdf::write_body_srdf(&body, None, None, &srdf)?;
     // A design folded through itself at home is exported as it is (its SRDF keeps the crossing
     // pair enabled), but it cannot start any motion: say so.
     if let Some((a, b)) = body.acm().home_fold() {

@@ -72,18 +72,26 @@ pub fn design_to_srdf(design: &Design, config: &SelfCollisionConfig, name: &str)
 /// (as [`crate::export::urdf::write_urdf`] names the URDF).
 pub fn write_srdf(design: &Design, config: &SelfCollisionConfig, path: &Path) -> Result<()> {
     let body = RobotBody::capsules(&design.chain(), config);
-    write_body_srdf(&body, None, path)
+    write_body_srdf(&body, None, None, path)
 }
 
-/// Writes the SRDF of the robot body `body` to `path` atomically, the robot named after the
-/// file stem: the planning group is the chain from `group`'s base to its tip (URDF links of an
-/// imported robot), or an exported design's ([`body_to_srdf`]) without one.
-pub fn write_body_srdf(body: &RobotBody, group: Option<(&str, &str)>, path: &Path) -> Result<()> {
-    let name = path
+/// Writes the SRDF of the robot body `body` to `path` atomically. The planning group is the
+/// chain from `group`'s base to its tip (URDF links of an imported robot), or an exported
+/// design's ([`body_to_srdf`]) without one. The robot is named `name` (an imported robot's URDF
+/// name: MoveIt requires the SRDF and the URDF to name the same robot), else after the file
+/// stem, as [`crate::export::urdf::write_urdf`] names an exported design's URDF.
+pub fn write_body_srdf(
+    body: &RobotBody,
+    group: Option<(&str, &str)>,
+    name: Option<&str>,
+    path: &Path,
+) -> Result<()> {
+    let stem = path
         .file_stem()
         .and_then(|s| s.to_str())
         .filter(|s| !s.is_empty())
         .unwrap_or("kinsynth_robot");
+    let name = name.unwrap_or(stem);
     let text = match group {
         Some((base, tip)) => chain_body_to_srdf(body, name, base, tip),
         None => body_to_srdf(body, name),

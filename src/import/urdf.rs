@@ -53,6 +53,9 @@ pub const POLYLINE_SEARCH_STEPS: usize = 10_000;
 /// A URDF robot as a chain.
 #[derive(Clone, Debug)]
 pub struct UrdfChain {
+    /// The URDF's robot name (`<robot name="…">`): an SRDF written for this robot names it so,
+    /// as MoveIt requires.
+    pub robot: String,
     /// The chain, one link per moving joint (merged as the module documentation says).
     pub chain: Chain,
     /// URDF names of the moving joints, in actuation-vector order.
@@ -938,6 +941,7 @@ pub fn chain_from_urdf(
         });
     }
     Ok(UrdfChain {
+        robot: robot.name.clone(),
         chain: Chain::new(base_pose, &chain_links, radius, colliders_per_link).with_tool(tool),
         joint_names: names,
         base,
