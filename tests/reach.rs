@@ -182,6 +182,40 @@ fn a_colliding_home_pose_gives_zero_and_says_why() {
     assert!(why.contains("link 3") && why.contains("post"), "{why}");
 }
 
+/// A home pose in several obstacles is reported by the body deepest in one, with its depth
+/// (boxes are parry shapes, whose distance is 0 however deep they overlap: the depth comes from
+/// the contact query), not by the first body found within the clearance; and the message
+/// counts the other bodies within the clearance.
+#[test]
+fn a_home_pose_in_several_obstacles_names_the_deepest_body() {
+    let design = planar_arm(&[1.0, 0.5]);
+    let cuboid = |name: &str, centre: [f64; 3], size: [f64; 3]| {
+        let place = IsometryMatrix3::translation(centre[0], centre[1], centre[2]);
+        Obstacle::new(name, ObstacleShape::Cuboid { size }, place).unwrap()
+    };
+    // Link 2 (x from 0 to 1) grazes the first box by 1 mm from above; link 3 (x from 1 to
+    // 1.5, radius 0.02) runs through the second box's middle: 0.05 + 0.02 m deep.
+    let grazed = cuboid("grazed", [0.5, 0.0, 0.019 + 0.05], [0.1, 0.1, 0.1]);
+    let block = cuboid("block", [1.25, 0.0, 0.0], [0.1, 0.1, 0.1]);
+    let (report, _) = run(
+        &design,
+        vec![grazed, block],
+        vec![Point3::new(0.0, 1.0, 0.0)],
+        CheckerKind::Certified,
+        100,
+    );
+    assert_eq!(report.reachability, 0.0);
+    let why = report.home_blocked.as_deref().unwrap();
+    assert!(
+        why.contains("link 3") && why.contains("0.0700 m deep in obstacle[1] (block)"),
+        "{why}"
+    );
+    assert!(
+        why.contains("(1 more body is within the clearance)"),
+        "{why}"
+    );
+}
+
 /// A scenario from `examples/scenarios/`.
 fn bundled(name: &str) -> Scenario {
     Scenario::load(

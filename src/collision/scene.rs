@@ -808,6 +808,27 @@ impl CollisionScene {
         query::distance(pose, shape, o.pose(), o.shape().as_ref()).map_or(0.0, |d| d.distance)
     }
 
+    /// Signed distance between a parry `shape` at world pose `pose` and obstacle `k`: the
+    /// distance when they are apart, minus the penetration depth when they overlap (parry's
+    /// contact query; 0 when it cannot tell). Slower than [`Self::shape_distance`]: for
+    /// reporting how deep a collision is, not for checking.
+    pub fn shape_signed_distance(
+        &self,
+        k: usize,
+        pose: &Pose,
+        shape: &dyn parry3d_f64::shape::Shape,
+    ) -> f64 {
+        let d = self.shape_distance(k, pose, shape);
+        if d > 0.0 {
+            return d;
+        }
+        let o = &self.obstacles[k];
+        match query::contact(pose, shape, o.pose(), o.shape().as_ref(), 0.0) {
+            Ok(Some(c)) if c.dist.is_finite() => c.dist.min(0.0),
+            _ => 0.0,
+        }
+    }
+
     /// Smallest distance between the capsule and any obstacle, culled: an obstacle whose
     /// bounding sphere is farther than the best distance so far (or than `stop`) is skipped.
     /// The result is exact when it is below `stop`; otherwise it is some value `≥ stop`.

@@ -123,8 +123,9 @@ pub fn planner_rng(seed: u64, stream: u64) -> ChaCha8Rng {
     rng
 }
 
-/// Says why the home pose is blocked: the first body within the clearance of an obstacle, or
-/// the first checked self pair in contact, naming the links.
+/// Says why the home pose is blocked: the body deepest in an obstacle (or nearest to one,
+/// within the clearance), with how many bodies are within the clearance; or else the first
+/// checked self pair in contact, naming the links.
 fn home_collision(scene: &CollisionScene, chain: &Chain, body: &RobotBody) -> String {
     if let Some((a, b)) = body.acm().home_fold() {
         return format!(
@@ -135,20 +136,43 @@ fn home_collision(scene: &CollisionScene, chain: &Chain, body: &RobotBody) -> St
     let mut placed = crate::collision::body::Placed::default();
     chain.fk(chain.home(), &mut frames);
     body.place(&frames, &mut placed);
+    // (distance, body, obstacle) of the deepest contact, and the bodies within the clearance.
+    let mut deepest: Option<(f64, usize, usize)> = None;
+    let mut bodies = 0;
     for b in 0..body.len() {
-        for (k, o) in scene.obstacles().iter().enumerate() {
-            let d = body.obstacle_distance(scene, &frames, &placed, b, k);
-            if d <= scene.clearance() {
-                return format!(
-                    "home pose collides: link {} ({}) is {:.4} m from obstacle[{k}] ({}), clearance {} m",
-                    body.link(b),
-                    body.frame(b),
-                    d.max(0.0),
-                    o.name,
-                    scene.clearance()
-                );
+        let mut hit = false;
+        for k in 0..scene.obstacles().len() {
+            if body.obstacle_distance(scene, &frames, &placed, b, k) > scene.clearance() {
+                continue;
+            }
+            hit = true;
+            let d = body.obstacle_signed_distance(scene, &frames, &placed, b, k);
+            if deepest.is_none_or(|(best, _, _)| d < best) {
+                deepest = Some((d, b, k));
             }
         }
+        bodies += usize::from(hit);
+    }
+    if let Some((d, b, k)) = deepest {
+        let what = if d < 0.0 {
+            format!("is {:.4} m deep in", -d)
+        } else if d == 0.0 {
+            "touches".to_string()
+        } else {
+            format!("is {d:.4} m from")
+        };
+        let others = match bodies {
+            1 => String::new(),
+            2 => " (1 more body is within the clearance)".to_string(),
+            n => format!(" ({} more bodies are within the clearance)", n - 1),
+        };
+        return format!(
+            "home pose collides: link {} ({}) {what} obstacle[{k}] ({}), clearance {} m{others}",
+            body.link(b),
+            body.frame(b),
+            scene.obstacles()[k].name,
+            scene.clearance()
+        );
     }
     if let Some((p, q, _)) = body.self_contact(&frames, &placed) {
         return format!(

@@ -364,6 +364,32 @@ impl RobotBody {
         self.obstacle_distance_below(scene, frames, placed, b, k, f64::INFINITY)
     }
 
+    /// Signed distance between body `b` and obstacle `k`: [`RobotBody::obstacle_distance`], and
+    /// where that is 0 (parry's shapes do not say how deep they overlap), minus the penetration
+    /// depth from parry's contact query. For reporting a collision, not for checking.
+    pub fn obstacle_signed_distance(
+        &self,
+        scene: &CollisionScene,
+        frames: &Frames,
+        placed: &Placed,
+        b: usize,
+        k: usize,
+    ) -> f64 {
+        let d = self.obstacle_distance(scene, frames, placed, b, k);
+        if d != 0.0 {
+            return d;
+        }
+        let ns = self.radii.len();
+        if b < ns {
+            let [p, q] = &frames.segments[b];
+            let capsule = Capsule::new(to_parry_point(p), to_parry_point(q), self.radii[b]);
+            scene.shape_signed_distance(k, &Pose::IDENTITY, &capsule)
+        } else {
+            let m = b - ns;
+            scene.shape_signed_distance(k, &placed.poses[m], self.solids[m].shape.as_ref())
+        }
+    }
+
     /// [`RobotBody::obstacle_distance`] when it is below `cap`, otherwise some value `≥ cap`
     /// ([`CollisionScene::distance_below`]).
     #[inline]
