@@ -56,9 +56,12 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
             design.display()
         );
     }
+    // Counted as `optimize` reports a design: links with a length and axes with a range
+    // (paper Eq. 28–29); the URDF has a frame for every link of the chain.
     say!(
-        "wrote {} ({} links, {} joints) and {}",
+        "wrote {} ({} links kept of {}, {} joints kept) and {}",
         output.display(),
+        d.links_kept(),
         d.links.len(),
         d.joints_kept(),
         srdf.display()
