@@ -319,6 +319,7 @@ def main():
     checked = 0
     hits = []
     worst = np.inf
+    worst_self = np.inf  # smallest distance of an enabled self pair
     env_set = set(env_pairs)
     for t in report["targets"]:
         path = t.get("path")
@@ -342,6 +343,8 @@ def main():
                     limit = clearance if p in env_set else 0.0
                     if p in env_set:
                         worst = min(worst, d)
+                    else:
+                        worst_self = min(worst_self, d)
                     if d <= limit:
                         cp = geom.collisionPairs[p]
                         hits.append(
@@ -351,7 +354,8 @@ def main():
     print(
         f"{checked} configurations, {self_pairs} self pairs enabled by the SRDF, "
         f"{len(obstacles)} obstacles ({meshes} mesh obstacles checked), "
-        f"smallest body-obstacle distance {worst:.4f} m, clearance {clearance} m"
+        f"smallest body-obstacle distance {worst:.4f} m, clearance {clearance} m, "
+        f"smallest self-pair distance {worst_self:.4f} m"
     )
     if surfaces:
         print(
