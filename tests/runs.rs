@@ -249,6 +249,28 @@ fn a_checkpoint_state_of_the_wrong_length_is_an_error_not_a_panic() {
         ],
     );
     c["state"]["population"][2]["cost"] = original["state"]["population"][2]["cost"].clone();
+    // The time limit counts from the seconds already spent: a negative count would never
+    // reach it (the run would not stop).
+    for value in [-1e12, -1e-9] {
+        let mut m = c.clone();
+        m["elapsed_s"] = serde_json::json!(value);
+        std::fs::write(&path, serde_json::to_string(&m).unwrap()).unwrap();
+        one_line_error(
+            &resume(&out, &["--time-limit", "2"]),
+            &[
+                "checkpoint.json",
+                "elapsed_s",
+                "must be a finite, non-negative",
+            ],
+        );
+    }
+    let mut m = c.clone();
+    m["history"][0]["elapsed_s"] = serde_json::json!(-3.0);
+    std::fs::write(&path, serde_json::to_string(&m).unwrap()).unwrap();
+    one_line_error(
+        &resume(&out, &[]),
+        &["checkpoint.json", "history[0].elapsed_s = -3"],
+    );
     // The optimiser's own settings in the state are held to the scenario's rules: a
     // population of 2^31 − 1 asked for 51 GB at the next generation.
     for (field, value, says) in [

@@ -594,6 +594,13 @@ impl<'a> Runner<'a> {
             message: m.trim_start_matches(['.', ':', ' ']).to_string(),
         })?;
         c.planner.validate().map_err(|e| e.in_file(&path))?;
+        // The time limit of a resumed run counts from the seconds already spent: a negative
+        // or non-finite count would never (or at once) reach it.
+        check_seconds("elapsed_s", c.elapsed_s).map_err(|e| e.in_file(&path))?;
+        for (i, row) in c.history.iter().enumerate() {
+            check_seconds(&format!("history[{i}].elapsed_s"), row.elapsed_s)
+                .map_err(|e| e.in_file(&path))?;
+        }
         Ok(c)
     }
 
