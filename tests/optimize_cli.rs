@@ -191,33 +191,43 @@ fn a_killed_run_resumes_to_the_same_result() {
     assert_eq!(rows(&killed), rows(&whole));
 }
 
+/// Ctrl-C (SIGINT), and SIGTERM and SIGHUP (what Slurm at a job's time limit, `timeout`,
+/// `docker stop` and a closed terminal send), stop a run within its generation: it writes its
+/// results, removes its lock and exits cleanly.
 #[test]
 fn ctrl_c_writes_the_best_design_so_far() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("interrupted");
-    let mut child = optimize(&out, &["--time-limit", "600", "--checkpoint-interval", "0"])
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let start = Instant::now();
-    while generations_in_checkpoint(&out) < 1 {
-        assert!(start.elapsed() < Duration::from_secs(120), "no checkpoint");
-        std::thread::sleep(Duration::from_millis(5));
+    for signal in ["-INT", "-TERM", "-HUP"] {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("interrupted");
+        let mut child = optimize(&out, &["--time-limit", "600", "--checkpoint-interval", "0"])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        let start = Instant::now();
+        while generations_in_checkpoint(&out) < 1 {
+            assert!(start.elapsed() < Duration::from_secs(120), "no checkpoint");
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        let status = Command::new("kill")
+            .args([signal, &child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(status.success());
+        let exit = child.wait().unwrap();
+        assert!(
+            exit.success(),
+            "{signal}: a stopped run ends cleanly after writing its results ({exit})"
+        );
+        let best = best_json_of(&out);
+        assert_eq!(best["stopped"], "interrupted", "{signal}");
+        assert!(best["design"]["links"].as_array().unwrap().len() == 8);
+        assert!(out.join("reach.json").exists(), "{signal}");
+        assert!(
+            !out.join(".kinsynth.lock").exists(),
+            "{signal}: the lock is removed"
+        );
     }
-    let status = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(status.success());
-    let exit = child.wait().unwrap();
-    assert!(
-        exit.success(),
-        "a Ctrl-C run ends cleanly after writing its results"
-    );
-    let best = best_json_of(&out);
-    assert_eq!(best["stopped"], "interrupted");
-    assert!(best["design"]["links"].as_array().unwrap().len() == 8);
 }
 
 /// `--evaluations` on the command line replaces both of the scenario's budgets: the scenario's

@@ -329,9 +329,9 @@ pub fn prepare(args: &Args) -> Result<Prepared, kinsynth::Error> {
     })
 }
 
-/// Raises the returned flag on Ctrl-C (the run stops within its generation, keeping the designs
-/// evaluated, and writes its results); a second Ctrl-C ends the process at once, removing the lock file (the operating
-/// system releases the lock itself).
+/// Raises the returned flag on Ctrl-C, SIGTERM or SIGHUP (the run stops within its generation,
+/// keeping the designs evaluated, and writes its results); a second signal ends the process at
+/// once, removing the lock file (the operating system releases the lock itself).
 pub fn stop_on_ctrl_c() -> std::sync::Arc<std::sync::atomic::AtomicBool> {
     let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     {
