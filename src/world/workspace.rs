@@ -4,7 +4,10 @@ use super::obstacle::Obstacle;
 use super::task::TaskOrientation;
 use crate::error::{Error, Result};
 use crate::kinematics::Chain;
+use crate::world::convert::to_parry_point;
 use nalgebra::Point3;
+use parry3d_f64::bounding_volume::{Aabb, BoundingVolume};
+use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy};
 
 /// A place where the robot body comes within the clearance of an obstacle.
 #[derive(Clone, Debug, PartialEq)]
@@ -30,6 +33,26 @@ pub struct Workspace {
     pub orientations: Vec<TaskOrientation>,
     /// Clearance `ε` (metres), at least 0.
     pub clearance: f64,
+}
+
+/// A bounding-volume hierarchy over the obstacles' bounding boxes (leaf `k`: obstacle `k`), so
+/// that a check of every task or body against every obstacle costs what the nearby obstacles
+/// cost, not all of them.
+fn obstacle_bvh(obstacles: &[Obstacle]) -> Bvh {
+    let boxes: Vec<Aabb> = obstacles
+        .iter()
+        .map(|o| o.shape().compute_aabb(o.pose()))
+        .collect();
+    Bvh::from_leaves(BvhBuildStrategy::Binned, &boxes)
+}
+
+/// The obstacles whose bounding boxes come within `margin` of the box of `points`, in index
+/// order.
+fn obstacles_near(bvh: &Bvh, points: &[Point3<f64>], margin: f64, out: &mut Vec<usize>) {
+    let query = Aabb::from_points(points.iter().map(to_parry_point)).loosened(margin);
+    out.clear();
+    out.extend(bvh.intersect_aabb(&query).map(|k| k as usize));
+    out.sort_unstable();
 }
 
 fn fmt_point(p: &Point3<f64>) -> String {
@@ -94,7 +117,14 @@ impl Workspace {
                     "must be finite",
                 ));
             }
-            for (k, o) in self.obstacles.iter().enumerate() {
+        }
+        let bvh = obstacle_bvh(&self.obstacles);
+        let mut near = Vec::new();
+        for (j, p) in self.tasks.iter().enumerate() {
+            // Only the obstacles whose boxes hold the point can hold it.
+            obstacles_near(&bvh, std::slice::from_ref(p), 0.0, &mut near);
+            for &k in &near {
+                let o = &self.obstacles[k];
                 if o.contains_point(p) {
                     return Err(Error::TaskInsideObstacle {
                         task: j,
@@ -115,9 +145,14 @@ impl Workspace {
         let mut frames = chain.frames();
         chain.fk(a, &mut frames);
         let mut out: Vec<Contact> = Vec::new();
+        let bvh = obstacle_bvh(&self.obstacles);
+        let mut near = Vec::new();
         for (s, seg) in frames.segments.iter().enumerate() {
             let link = chain.segment_link(s);
-            for (k, o) in self.obstacles.iter().enumerate() {
+            // Obstacles farther than the clearance from the capsule's box cannot be within it.
+            obstacles_near(&bvh, seg, chain.radius() + self.clearance, &mut near);
+            for &k in &near {
+                let o = &self.obstacles[k];
                 let d = o.distance_to_capsule(&seg[0], &seg[1], chain.radius());
                 if d <= self.clearance {
                     match out.iter_mut().find(|c| c.link == link && c.obstacle == k) {
@@ -182,5 +217,105 @@ mod tests {
         assert!(w.contacts(&chain, &[-0.5, 0.0]).is_empty());
         // Joint 2 sits at the tip: moving it does not move link 2.
         assert_eq!(w.contacts(&chain, &[0.0, -0.5]).len(), 1);
+    }
+
+    /// The checks culled by the obstacles' bounding boxes find what checking every pair finds:
+    /// the first task inside an obstacle (by task, then obstacle), and every link–obstacle
+    /// contact with its distance, in the same order; on random cells of spheres, boxes and
+    /// capsules, rotated, with tasks and arms among them.
+    #[test]
+    fn culled_checks_are_those_of_every_pair() {
+        use crate::world::ObstacleShape;
+        use rand::{RngExt, SeedableRng};
+        use rand_chacha::ChaCha8Rng;
+        let mut rng = ChaCha8Rng::seed_from_u64(4);
+        let mut r = [Range::ZERO; 6];
+        r[Axis::Rz.index()] = Range::new(-3.0, 3.0);
+        r[Axis::Ry.index()] = Range::new(-3.0, 3.0);
+        let link = Link::from_dh(
+            &Dh {
+                a: 0.5,
+                ..Dh::default()
+            },
+            r,
+        );
+        let chain = Chain::new(IsometryMatrix3::identity(), &vec![link; 4], 0.05, 2);
+        let (mut inside, mut clear, mut contacts) = (0, 0, 0);
+        for case in 0..200 {
+            let count = rng.random_range(1..40);
+            let mut coord = || rng.random_range(-1.5..1.5);
+            let obstacles: Vec<Obstacle> = (0..count)
+                .map(|k| {
+                    let shape = match k % 3 {
+                        0 => ObstacleShape::Sphere { radius: 0.25 },
+                        1 => ObstacleShape::Cuboid {
+                            size: [0.5, 0.3, 0.4],
+                        },
+                        _ => ObstacleShape::Capsule {
+                            length: 0.4,
+                            radius: 0.15,
+                        },
+                    };
+                    let place = IsometryMatrix3::new(
+                        nalgebra::Vector3::new(coord(), coord(), coord()),
+                        nalgebra::Vector3::new(coord(), coord(), coord()),
+                    );
+                    Obstacle::new(format!("o{k}"), shape, place).unwrap()
+                })
+                .collect();
+            let tasks: Vec<Point3<f64>> = (0..1 + count % 29)
+                .map(|_| Point3::new(coord(), coord(), coord()))
+                .collect();
+            let clearance = if case % 2 == 0 { 0.0 } else { 0.05 };
+            // Every pair, in order.
+            let first = tasks.iter().enumerate().find_map(|(j, p)| {
+                obstacles
+                    .iter()
+                    .position(|o| o.contains_point(p))
+                    .map(|k| (j, k))
+            });
+            let w = Workspace {
+                orientations: vec![TaskOrientation::Free; tasks.len()],
+                obstacles: obstacles.clone(),
+                tasks: tasks.clone(),
+                clearance,
+            };
+            match (w.validate(), first) {
+                (Ok(()), None) => clear += 1,
+                (Err(Error::TaskInsideObstacle { task, obstacle, .. }), Some(want)) => {
+                    assert_eq!((task, obstacle), want, "case {case}");
+                    inside += 1;
+                }
+                (got, want) => panic!("case {case}: {got:?} against {want:?}"),
+            }
+            let a: Vec<f64> = (0..chain.dof())
+                .map(|_| rng.random_range(-3.0..3.0))
+                .collect();
+            let mut frames = chain.frames();
+            chain.fk(&a, &mut frames);
+            let mut want: Vec<Contact> = Vec::new();
+            for (s, seg) in frames.segments.iter().enumerate() {
+                for (k, o) in obstacles.iter().enumerate() {
+                    let d = o.distance_to_capsule(&seg[0], &seg[1], chain.radius());
+                    if d <= clearance {
+                        let link = chain.segment_link(s);
+                        match want.iter_mut().find(|c| c.link == link && c.obstacle == k) {
+                            Some(c) => c.distance = c.distance.min(d),
+                            None => want.push(Contact {
+                                link,
+                                obstacle: k,
+                                distance: d,
+                            }),
+                        }
+                    }
+                }
+            }
+            contacts += want.len();
+            assert_eq!(w.contacts(&chain, &a), want, "case {case}");
+        }
+        assert!(
+            inside > 20 && clear > 20 && contacts > 50,
+            "{inside} {clear} {contacts}"
+        );
     }
 }
