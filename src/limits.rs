@@ -67,12 +67,12 @@ pub fn iteration_cap(axes: usize, ik_steps: usize) -> usize {
     by_search.min(by_ik).clamp(1, MAX_ITERATIONS)
 }
 /// Most shape casts the `ccd` checker makes in one planner run (one body against one obstacle,
-/// or one self pair, over one sub-step; against a triangle mesh, one per
-/// [`crate::collision::edge::ccd::TRIANGLES_PER_CAST`] triangles): its cost per edge grows with
-/// the motion and the bodies, up to 64 sub-steps of every one, which the iteration limits do
-/// not see. A cast costs 7–13 µs on this machine (a 64-link arm with `l_max = 100`, paper-3d,
-/// the glove box), so the limit stands for 20–40 s. A run that reaches it stops, as at its
-/// iteration budget.
+/// or one self pair, over one sub-step; against a triangle mesh, one more per triangle whose
+/// bounding box comes near the moving body, the triangles the cast may test): its cost per edge
+/// grows with the motion, the bodies and the triangles near them, up to 64 sub-steps of every
+/// body, which the iteration limits do not see. A cast costs 7–13 µs on this machine (a 64-link
+/// arm with `l_max = 100`, paper-3d, the glove box), so the limit stands for 20–40 s. A run
+/// that reaches it stops, as at its iteration budget.
 pub const MAX_CCD_CASTS: u64 = 3_000_000;
 
 /// Most random configurations sampled for the allowed-collision matrix

@@ -89,8 +89,8 @@ pub struct EdgeStats {
     /// `certified` kept from an earlier check.
     pub fk: u64,
     /// Shape casts made by `ccd` (its unit of work: one body against one obstacle, or one
-    /// self pair, over one sub-step; a cast against a triangle mesh counts one per
-    /// [`ccd::TRIANGLES_PER_CAST`] of its triangles).
+    /// self pair, over one sub-step; a cast against a triangle mesh counts one more per
+    /// triangle whose bounding box comes near the moving body).
     pub casts: u64,
 }
 
