@@ -195,7 +195,19 @@ fn a_step_past_its_deadline_is_cut_with_the_points_it_evaluated() {
         deadline: Some(std::time::Instant::now()),
         stop: None,
         budget: None,
+        may_skip_all: false,
     };
+    // A cutoff that allows it cuts a step begun past its deadline before any evaluation.
+    for (name, make) in cut_makers() {
+        let mut opt = make();
+        let none = Cutoff {
+            may_skip_all: true,
+            ..past
+        };
+        let r = step(opt.as_mut(), 0, none);
+        let cut = r.cut.unwrap_or_else(|| panic!("{name}: not cut"));
+        assert!(cut.evaluated.is_empty() && r.evaluations == 0, "{name}");
+    }
     for (name, make) in makers {
         let mut opt = make();
         for generation in 0..3u64 {

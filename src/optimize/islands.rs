@@ -439,13 +439,17 @@ impl<'r, 'a> IslandJob<'r, 'a> {
                 deadline,
                 stop: Some(stop),
                 budget: None,
+                may_skip_all: true,
             };
             let mut whole = Vec::new();
             for (k, island) in local.iter_mut().enumerate() {
                 let i = island.index as u64;
                 let share = decision.left.map(|l| budget_share(l, n, island.index));
+                // Past the time limit only the first island of a new job evaluates a design
+                // (its first), so that the job has a result; the others stop at once.
                 let cutoff = Cutoff {
                     budget: share,
+                    may_skip_all: island.index != 0 || total > 0,
                     ..cutoff
                 };
                 before.push((island.optimizer.snapshot(), island.evaluations));

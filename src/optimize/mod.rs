@@ -66,7 +66,7 @@ impl Evaluated {
 ///
 /// A point whose evaluation has not begun when the `cutoff` is reached (the time is up, or the
 /// run is told to stop) is skipped; the first point is always evaluated, so that every step
-/// evaluates something. Points past the cutoff's evaluation budget are skipped too (by their
+/// evaluates something, unless the cutoff allows a step without any ([`Cutoff::may_skip_all`]). Points past the cutoff's evaluation budget are skipped too (by their
 /// place in the batch, so which ones does not depend on timing). The batch is then [`Cut`],
 /// with the points that were evaluated, and the step that asked for it leaves its result to
 /// the caller (see [`Optimizer::step`]).
@@ -83,7 +83,8 @@ pub fn evaluate_batch(
         .into_par_iter()
         .enumerate()
         .filter_map(|(i, x)| {
-            if cutoff.budget.is_some_and(|b| i as u64 >= b) || (i > 0 && cutoff.reached()) {
+            let always = i == 0 && !cutoff.may_skip_all;
+            if cutoff.budget.is_some_and(|b| i as u64 >= b) || (!always && cutoff.reached()) {
                 return None;
             }
             let stream = first_stream.wrapping_add((i as u64).wrapping_mul(stride));
@@ -117,6 +118,11 @@ pub struct Cutoff<'a> {
     /// it is counted by the points' places in the step, so a cut by it is the same on every
     /// run.
     pub budget: Option<u64>,
+    /// When set, a step begun after the deadline (or the flag) evaluates nothing; by default
+    /// its first point is evaluated all the same, so that a run has a result. An island job
+    /// sets it on every island but the first of a new job: otherwise each of its islands
+    /// would evaluate a design after the time is up, one after another.
+    pub may_skip_all: bool,
 }
 
 impl Cutoff<'_> {

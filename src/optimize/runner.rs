@@ -682,6 +682,7 @@ impl<'a> Runner<'a> {
                     deadline,
                     stop: Some(stop),
                     budget: left,
+                    may_skip_all: false,
                 },
             });
             if let Some(cut) = report.cut {
