@@ -2,7 +2,7 @@
 
 use crate::error::{Error, Result};
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Writes `bytes` to `path` atomically: into a temporary file in the same directory, flushed
 /// and synced, then renamed over `path`. A crash or a full disk leaves the old file (or none).
@@ -115,6 +115,154 @@ pub fn check_output_dir(path: &Path) -> Result<()> {
     Ok(())
 }
 
+/// True when `a` and `b` name the same existing file or folder, however they are spelt: other
+/// relative paths, symbolic links and hard links to it included. A path where nothing exists
+/// names no file, so it equals nothing.
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    let (Ok(x), Ok(y)) = (std::fs::metadata(a), std::fs::metadata(b)) else {
+        return false;
+    };
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        x.dev() == y.dev() && x.ino() == y.ino()
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = (x, y);
+        matches!(
+            (std::fs::canonicalize(a), std::fs::canonicalize(b)),
+            (Ok(p), Ok(q)) if p == q
+        )
+    }
+}
+
+/// Checks, before anything is written, that the output file `path` (given as `flag`) is none
+/// of the command's `inputs`, each given with what it is (`"the input scenario"`): writing it
+/// would replace that input. Only a regular file can be replaced: a device or a pipe such as
+/// `/dev/stdout` is written into ([`write_atomic`]) and passes.
+pub fn check_not_input(flag: &str, path: &Path, inputs: &[(&Path, &str)]) -> Result<()> {
+    if !std::fs::metadata(path).is_ok_and(|m| m.is_file()) {
+        return Ok(());
+    }
+    match inputs.iter().find(|(input, _)| same_file(path, input)) {
+        Some((_, what)) => Err(Error::invalid(
+            flag,
+            path.display(),
+            format!("is also {what}"),
+        )),
+        None => Ok(()),
+    }
+}
+
+/// [`check_not_input`] for the `files` that an output folder `dir` (given as `flag`) receives:
+/// none of them may be one of `inputs`. The error names the flag, the folder and the file.
+pub fn check_dir_not_input(
+    flag: &str,
+    dir: &Path,
+    files: impl IntoIterator<Item = PathBuf>,
+    inputs: &[(&Path, &str)],
+) -> Result<()> {
+    // Only an input that lies in the folder can be one of its files.
+    let within: Vec<&(&Path, &str)> = inputs
+        .iter()
+        .filter(|(input, _)| {
+            std::fs::canonicalize(input)
+                .ok()
+                .and_then(|p| p.parent().map(|d| same_file(d, dir)))
+                .unwrap_or(false)
+        })
+        .collect();
+    if within.is_empty() {
+        return Ok(());
+    }
+    for file in files {
+        if !std::fs::metadata(&file).is_ok_and(|m| m.is_file()) {
+            continue;
+        }
+        if let Some((_, what)) = within.iter().find(|(input, _)| same_file(&file, input)) {
+            return Err(Error::invalid(
+                flag,
+                dir.display(),
+                format!(
+                    "its file {} is also {what}",
+                    file.file_name()
+                        .map_or(file.display(), |n| Path::new(n).display())
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// `path` made absolute with the symbolic links of its existing part resolved, and the `.`
+/// and `..` of the part that does not exist yet applied as the file system will: where a
+/// folder about to be created will lie.
+pub fn resolve(path: &Path) -> PathBuf {
+    let absolute = if path.is_absolute() {
+        path.to_path_buf()
+    } else {
+        std::env::current_dir()
+            .map(|d| d.join(path))
+            .unwrap_or_else(|_| path.to_path_buf())
+    };
+    let mut existing = absolute.as_path();
+    let mut rest = Vec::new();
+    let mut base = loop {
+        if let Ok(p) = std::fs::canonicalize(existing) {
+            break p;
+        }
+        match (existing.parent(), existing.file_name()) {
+            (Some(parent), Some(name)) => {
+                rest.push(name.to_os_string());
+                existing = parent;
+            }
+            // `..` or the root: nothing more to resolve.
+            _ => break existing.to_path_buf(),
+        }
+    };
+    for part in rest.iter().rev() {
+        base.push(part);
+    }
+    // `Path::parent` never yields a `..`, but one may follow a missing folder: apply them.
+    let mut out = PathBuf::new();
+    for c in base.components() {
+        match c {
+            std::path::Component::ParentDir => {
+                out.pop();
+            }
+            std::path::Component::CurDir => {}
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+/// Checks, before anything is written, that the output folder `dir` (given as `flag`) is not
+/// one of the folders `inputs` (each given with what it is) and does not lie inside one: those
+/// are only read.
+pub fn check_dir_outside(flag: &str, dir: &Path, inputs: &[(&Path, &str)]) -> Result<()> {
+    let out = resolve(dir);
+    for (input, what) in inputs {
+        let input = resolve(input);
+        if out == input {
+            return Err(Error::invalid(
+                flag,
+                dir.display(),
+                format!("is also {what}"),
+            ));
+        }
+        if out.starts_with(&input) {
+            return Err(Error::invalid(
+                flag,
+                dir.display(),
+                format!("lies inside {what}"),
+            ));
+        }
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -182,6 +330,51 @@ mod tests {
         assert!(e.contains("directory"), "{e}");
         let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
         assert_eq!(names.len(), 5, "no temporary file may be left behind");
+    }
+
+    #[test]
+    fn outputs_are_compared_with_inputs_however_spelt() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        let input = d.join("s.toml");
+        std::fs::write(&input, "x").unwrap();
+        std::fs::create_dir(d.join("sub")).unwrap();
+        let around = d.join("sub/../s.toml");
+        assert!(same_file(&input, &around));
+        assert!(!same_file(&input, &d.join("new.toml")), "nothing there yet");
+        let inputs = [(input.as_path(), "the input scenario")];
+        let e = check_not_input("-o", &around, &inputs)
+            .unwrap_err()
+            .to_string();
+        assert!(e.ends_with("s.toml: is also the input scenario"), "{e}");
+        assert!(check_not_input("-o", &d.join("new.toml"), &inputs).is_ok());
+        let e = check_dir_not_input("--out", d, [d.join("s.toml")], &inputs)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("its file s.toml is also the input scenario"),
+            "{e}"
+        );
+        // A folder about to be created lies where its `..` put it.
+        assert_eq!(resolve(&d.join("sub/new/../x")), resolve(d).join("sub/x"));
+        let slices = [(d.join("sub"), "the slice")];
+        let slices: Vec<(&Path, &str)> = slices.iter().map(|(p, w)| (p.as_path(), *w)).collect();
+        for (out, ok) in [
+            ("sub", false),
+            ("sub/new", false),
+            ("x/../sub", false),
+            ("x", true),
+        ] {
+            assert_eq!(
+                check_dir_outside("--out", &d.join(out), &slices).is_ok(),
+                ok,
+                "{out}"
+            );
+        }
+        assert!(
+            check_dir_outside("--out", d, &slices).is_ok(),
+            "a folder holding it"
+        );
     }
 
     #[test]

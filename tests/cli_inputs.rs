@@ -1086,3 +1086,130 @@ fn optimizer_settings_are_named_under_their_section() {
         rejected(&check(&p), &["o.toml", parts[0], parts[1]]);
     }
 }
+
+/// No output may replace an input: `view -o`, `reach --json`, `--write-srdf` and
+/// `--trajectories`, `urdf -o` (and the SRDF beside it) and `optimize --out` naming an input,
+/// directly, through another relative path or through a symbolic link, are refused before
+/// anything is written, naming the flag, the path and the input.
+#[test]
+fn an_output_that_is_an_input_is_refused_before_anything_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let text = std::fs::read_to_string(repo("examples/scenarios/paper-2d.toml")).unwrap();
+    let s = write(d, "s.toml", &text);
+    let design_text = design("0.3", "[-1, 1]", 2);
+    let dj = write(d, "d.json", &design_text);
+    std::fs::create_dir(d.join("sub")).unwrap();
+    let around = d.join("sub/../s.toml");
+    #[cfg(unix)]
+    std::os::unix::fs::symlink(&s, d.join("link.toml")).unwrap();
+    #[cfg(not(unix))]
+    std::fs::copy(&s, d.join("link.toml")).unwrap();
+    let link = d.join("link.toml");
+    let os = |v: &[&Path]| -> Vec<std::ffi::OsString> {
+        v.iter().map(|p| p.as_os_str().to_owned()).collect()
+    };
+    let cases: Vec<(Vec<std::ffi::OsString>, Vec<&str>)> = vec![
+        (
+            os(&[Path::new("view"), &s, Path::new("-o"), &s]),
+            vec!["-o = ", "s.toml: is also the input scenario"],
+        ),
+        (
+            os(&[Path::new("view"), &s, Path::new("-o"), &around]),
+            vec!["-o = ", "is also the input scenario"],
+        ),
+        (
+            os(&[Path::new("reach"), &s, Path::new("--json"), &link]),
+            vec!["--json = ", "link.toml: is also the input scenario"],
+        ),
+        (
+            os(&[Path::new("reach"), &s, Path::new("--write-srdf"), &s]),
+            vec!["--write-srdf = ", "is also the input scenario"],
+        ),
+        (
+            os(&[
+                Path::new("reach"),
+                &s,
+                Path::new("--design"),
+                &dj,
+                Path::new("--json"),
+                &dj,
+            ]),
+            vec!["--json = ", "is also the --design file"],
+        ),
+        (
+            os(&[Path::new("urdf"), &dj, Path::new("-o"), &dj]),
+            vec!["-o = ", "d.json: is also the input design"],
+        ),
+        (
+            os(&[
+                Path::new("optimize"),
+                &s,
+                Path::new("--out"),
+                d,
+                Path::new("--evaluations"),
+                Path::new("2"),
+            ]),
+            vec!["--out = ", "its file best.json is also the input scenario"],
+        ),
+    ];
+    // The scenario under the names the outputs take.
+    let best = write(d, "best.json", &text);
+    let task = write(d, "task_0.json", &text);
+    let srdf_scenario = write(d, "x.srdf", &text);
+    let mut cases = cases;
+    cases[6].0[1] = best.as_os_str().to_owned();
+    cases.push((
+        os(&[Path::new("reach"), &task, Path::new("--trajectories"), d]),
+        vec![
+            "--trajectories = ",
+            "its file task_0.json is also the input scenario",
+        ],
+    ));
+    cases.push((
+        os(&[
+            Path::new("urdf"),
+            &dj,
+            Path::new("-o"),
+            &d.join("x.urdf"),
+            Path::new("--scenario"),
+            &srdf_scenario,
+        ]),
+        vec![
+            "-o = ",
+            "x.urdf: the SRDF beside it, ",
+            "x.srdf, is also the input scenario",
+        ],
+    ));
+    let before: Vec<_> = std::fs::read_dir(d)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    for (args, parts) in &cases {
+        let a: Vec<&OsStr> = args.iter().map(|s| s.as_os_str()).collect();
+        rejected(&a, parts);
+    }
+    let after: Vec<_> = std::fs::read_dir(d)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    assert_eq!(
+        before.len(),
+        after.len(),
+        "nothing may be written: {after:?}"
+    );
+    for f in [&s, &best, &task, &srdf_scenario] {
+        assert_eq!(std::fs::read_to_string(f).unwrap(), text, "{}", f.display());
+    }
+    assert_eq!(std::fs::read_to_string(&dj).unwrap(), design_text);
+    // A new output beside the inputs is written as before.
+    let page = d.join("page.html");
+    let (code, stderr) = run(&[
+        "view".as_ref(),
+        s.as_os_str(),
+        "-o".as_ref(),
+        page.as_os_str(),
+    ]);
+    assert_eq!(code, Some(0), "{stderr}");
+    assert!(page.is_file());
+}

@@ -1,7 +1,7 @@
 //! The commands of the `kinsynth` binary, one file each: parse the command's options, call the
 //! library, print. `main.rs` only parses the command line and dispatches here.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// `println!` that ends the process quietly when stdout is closed (e.g. piped into `head`).
 macro_rules! say {
@@ -24,6 +24,27 @@ pub mod reach;
 pub mod scenario;
 pub mod urdf;
 pub mod view;
+
+/// The input files of a command, each with what it is, for the checks that no output replaces
+/// one ([`kinsynth::io::check_not_input`]): the scenario `file`, the mesh files of `s` and the
+/// given files of `more`.
+pub fn inputs<'a>(
+    file: &'a Path,
+    s: &'a kinsynth::Scenario,
+    more: &[(Option<&'a PathBuf>, &'a str)],
+) -> Vec<(&'a Path, &'a str)> {
+    let mut all = vec![(file, "the input scenario")];
+    all.extend(
+        more.iter()
+            .filter_map(|(p, what)| p.map(|p| (p.as_path(), *what))),
+    );
+    all.extend(
+        s.mesh_files()
+            .into_iter()
+            .map(|m| (m, "a mesh of the scenario")),
+    );
+    all
+}
 
 /// Applies `--checker` and `--lmax` to the scenario's planner settings (a given `L_max`
 /// replaces any schedule).

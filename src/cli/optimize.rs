@@ -86,6 +86,23 @@ pub struct Args {
     pub islands: Option<Option<usize>>,
 }
 
+/// The files a run writes into its output directory (beside the folder of trajectories).
+const OUTPUT_FILES: [&str; 10] = {
+    use kinsynth::optimize::output::files;
+    [
+        files::BEST,
+        files::TIME,
+        files::HISTORY,
+        files::REACH,
+        files::PLOT,
+        files::CHECKPOINT,
+        files::URDF,
+        files::SRDF,
+        files::REPORT,
+        files::ISLANDS,
+    ]
+};
+
 /// What `optimize` has read and checked before a run starts, with the output lock held.
 pub struct Prepared {
     /// The scenario.
@@ -274,6 +291,23 @@ pub fn prepare(args: &Args) -> Result<Prepared, kinsynth::Error> {
             "give --time-limit or --evaluations (or set them in [optimizer])",
         ));
     }
+    // No result may replace the scenario or one of its meshes: checked before the lock file
+    // is written.
+    {
+        use kinsynth::optimize::output::files;
+        let flag = if resume.is_some() {
+            "--resume"
+        } else {
+            "--out"
+        };
+        let inputs = super::inputs(&scenario_path, &s, &[]);
+        let results = OUTPUT_FILES.iter().map(|name| out.join(name));
+        kinsynth::io::check_dir_not_input(flag, &out, results, &inputs)?;
+        let trajectories = out.join(files::TRAJECTORIES);
+        let paths = (0..s.workspace.tasks.len())
+            .flat_map(|i| kinsynth::export::trajectory::trajectory_files(&trajectories, i));
+        kinsynth::io::check_dir_not_input(flag, &trajectories, paths, &inputs)?;
+    }
     let (lock, acquired) = OutputLock::acquire(&out)?;
     if let Some(o) = &acquired.took_over {
         eprintln!(
@@ -296,18 +330,7 @@ pub fn prepare(args: &Args) -> Result<Prepared, kinsynth::Error> {
     // the results written before them would be left beside a failure.
     {
         use kinsynth::optimize::output::files;
-        for name in [
-            files::BEST,
-            files::TIME,
-            files::HISTORY,
-            files::REACH,
-            files::PLOT,
-            files::CHECKPOINT,
-            files::URDF,
-            files::SRDF,
-            files::REPORT,
-            files::ISLANDS,
-        ] {
+        for name in OUTPUT_FILES {
             kinsynth::io::check_output_file(&out.join(name))?;
         }
         kinsynth::io::check_output_dir(&out.join(files::TRAJECTORIES))?;

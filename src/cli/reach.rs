@@ -70,7 +70,12 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
     }
     if let Some(path) = &write_srdf {
         kinsynth::io::check_output_file(path)?;
-        if json.as_ref() == Some(path) || urdf.trajectories.as_ref() == Some(path) {
+        let same = |other: &Option<PathBuf>| {
+            other
+                .as_ref()
+                .is_some_and(|o| kinsynth::io::resolve(o) == kinsynth::io::resolve(path))
+        };
+        if same(&json) || same(&urdf.trajectories) {
             return Err(kinsynth::Error::invalid(
                 "--write-srdf",
                 path.display(),
@@ -80,7 +85,10 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
     }
     if let Some(dir) = &urdf.trajectories {
         kinsynth::io::check_output_dir(dir)?;
-        if json.as_ref() == Some(dir) {
+        if json
+            .as_ref()
+            .is_some_and(|j| kinsynth::io::resolve(j) == kinsynth::io::resolve(dir))
+        {
             return Err(kinsynth::Error::invalid(
                 "--trajectories",
                 dir.display(),
@@ -89,6 +97,27 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         }
     }
     let s = Scenario::load(&file)?;
+    // No output may replace a file the run reads.
+    let inputs = super::inputs(
+        &file,
+        &s,
+        &[
+            (design.as_ref(), "the --design file"),
+            (urdf.robot.urdf.as_ref(), "the --urdf robot"),
+            (urdf.robot.srdf.as_ref(), "the --srdf file"),
+        ],
+    );
+    if let Some(path) = &json {
+        kinsynth::io::check_not_input("--json", path, &inputs)?;
+    }
+    if let Some(path) = &write_srdf {
+        kinsynth::io::check_not_input("--write-srdf", path, &inputs)?;
+    }
+    if let Some(dir) = &urdf.trajectories {
+        let files = (0..s.workspace.tasks.len())
+            .flat_map(|i| kinsynth::export::trajectory::trajectory_files(dir, i));
+        kinsynth::io::check_dir_not_input("--trajectories", dir, files, &inputs)?;
+    }
     let max_seeds = kinsynth::optimize::runner::MAX_SEEDS as u64;
     let seeds = whole("--seeds", seeds, 1, max_seeds)?;
     // A best.json without --seed or --seeds replays the evaluation that produced it.

@@ -29,10 +29,10 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         scenario,
     } = args;
     let d = kinsynth::Design::load(&design)?;
-    let config = match &scenario {
-        Some(p) => Scenario::load(p)?.planner.self_collision,
-        None => kinsynth::collision::SelfCollisionConfig::default(),
-    };
+    let s = scenario.as_ref().map(|p| Scenario::load(p)).transpose()?;
+    let config = s
+        .as_ref()
+        .map_or_else(Default::default, |s| s.planner.self_collision.clone());
     let srdf = output.with_extension("srdf");
     if srdf == output {
         return Err(kinsynth::Error::invalid(
@@ -45,6 +45,22 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
     // its SRDF.
     kinsynth::io::check_output_file(&output)?;
     kinsynth::io::check_output_file(&srdf)?;
+    // Neither may replace a file the export is made from.
+    let mut inputs = vec![(design.as_path(), "the input design")];
+    if let (Some(p), Some(s)) = (&scenario, &s) {
+        inputs = super::inputs(p, s, &[]);
+        inputs.insert(0, (design.as_path(), "the input design"));
+    }
+    kinsynth::io::check_not_input("-o", &output, &inputs)?;
+    if let Err(kinsynth::Error::InvalidValue { reason, .. }) =
+        kinsynth::io::check_not_input("-o", &srdf, &inputs)
+    {
+        return Err(kinsynth::Error::invalid(
+            "-o",
+            output.display(),
+            format!("the SRDF beside it, {}, {reason}", srdf.display()),
+        ));
+    }
     kinsynth::export::write_urdf(&d, &output)?;
     let body = kinsynth::collision::RobotBody::capsules(&d.chain(), &config);
     kinsynth::export::srdf::write_body_srdf(&body, None, None, &srdf)?;

@@ -31,6 +31,18 @@ pub struct Args {
 /// Runs the command.
 pub fn run(args: Args) -> Result<(), kinsynth::Error> {
     let s = Scenario::load(&args.file)?;
+    // The page must not replace a file it is made from.
+    let inputs = super::inputs(
+        &args.file,
+        &s,
+        &[
+            (args.design.as_ref(), "the --design file"),
+            (args.reach.as_ref(), "the --reach report"),
+            (args.robot.urdf.as_ref(), "the --urdf robot"),
+            (args.robot.srdf.as_ref(), "the --srdf file"),
+        ],
+    );
+    kinsynth::io::check_not_input("-o", &args.output, &inputs)?;
     let (chain, joint_names, body) = match args.robot.load(&s)? {
         Some(r) => {
             args.robot.announce(&r);

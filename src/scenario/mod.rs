@@ -780,6 +780,21 @@ impl Scenario {
         Obstacle::with_cache(name, geometry, placement, meshes).map_err(at(&prefix))
     }
 
+    /// The mesh files the scenario's obstacles are read from, each once, as the scenario names
+    /// them (relative to its folder).
+    pub fn mesh_files(&self) -> Vec<&Path> {
+        let mut seen = std::collections::HashSet::new();
+        let mut files: Vec<&Path> = Vec::new();
+        for o in &self.workspace.obstacles {
+            if let crate::world::obstacle::ObstacleShape::Mesh { file, .. } = &o.geometry {
+                if seen.insert(file.as_path()) {
+                    files.push(file);
+                }
+            }
+        }
+        files
+    }
+
     /// Links of the scenario's largest design ([`DesignSpace::largest`]) that touch an obstacle
     /// (within the clearance) in the home pose. A design whose home pose collides cannot move.
     pub fn home_contacts(&self) -> Vec<Contact> {
