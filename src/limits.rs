@@ -90,6 +90,11 @@ pub const MAX_POPULATION: usize = 10_000;
 /// `planner.lambda`, mesh scale factors).
 pub const MAX_SETTING: f64 = 1e6;
 
+/// Largest number of seconds a run's records may carry (`time.json`, a checkpoint's history as
+/// `kinsynth merge` reads them) and the largest time limit of an experiment: 10^9 s, about 32
+/// years.
+pub const MAX_SECONDS: f64 = 1e9;
+
 /// `v` is finite and `|v| ≤ bound`.
 pub fn within(v: f64, bound: f64) -> bool {
     v.is_finite() && v.abs() <= bound

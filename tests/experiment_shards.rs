@@ -163,3 +163,190 @@ fn two_shards_merge_into_the_unsharded_tables() {
         );
     }
 }
+
+/// Runs `kinsynth merge` on `dirs` into `out`: it must fail with one line `error: …` holding
+/// every part, and write nothing into `out`.
+fn merge_refused(dirs: &[&Path], out: &Path, parts: &[&str]) {
+    let before = std::fs::read_dir(out).map_or(0, |d| d.count());
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_kinsynth"))
+        .arg("merge")
+        .args(dirs)
+        .arg("--out")
+        .arg(out)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "one line: {stderr}");
+    assert!(stderr.len() < 400, "a short line: {stderr}");
+    for p in parts {
+        assert!(stderr.contains(p), "`{p}` missing from: {stderr}");
+    }
+    let after = std::fs::read_dir(out).map_or(0, |d| d.count());
+    assert_eq!(
+        before,
+        after,
+        "nothing may be written into {}",
+        out.display()
+    );
+}
+
+/// Two slices of a small experiment.
+fn two_slices(dir: &Path) -> (std::path::PathBuf, std::path::PathBuf) {
+    let s = ExperimentSpec { runs: 2, ..spec() };
+    let (a, b) = (dir.join("a"), dir.join("b"));
+    run_experiment(&s, Shard { index: 1, count: 2 }, &a, &mut |_| {}).unwrap();
+    run_experiment(&s, Shard { index: 2, count: 2 }, &b, &mut |_| {}).unwrap();
+    (a, b)
+}
+
+/// The slices' folders are only read: `merge --out` naming one of them (or a folder inside
+/// one, or one through a link) is refused before anything is written; a folder holding them is
+/// fine.
+#[test]
+fn merge_never_writes_into_a_slice() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = two_slices(dir.path());
+    let manifest = read(&a.join("experiment.json"));
+    merge_refused(&[&a, &b], &a, &["--out = ", "is also the slice folder"]);
+    merge_refused(&[&a, &b], &b.join("../a"), &["is also the slice folder"]);
+    merge_refused(
+        &[&a, &b],
+        &a.join("merged"),
+        &["lies inside the slice folder"],
+    );
+    merge_refused(
+        &[&a, &b],
+        &b.join("workspace1"),
+        &["lies inside the slice folder"],
+    );
+    #[cfg(unix)]
+    {
+        let link = dir.path().join("link");
+        std::os::unix::fs::symlink(&a, &link).unwrap();
+        merge_refused(&[&a, &b], &link, &["is also the slice folder"]);
+    }
+    assert_eq!(read(&a.join("experiment.json")), manifest);
+    assert!(!a.join("merged").exists());
+    merge(&[a, b], dir.path()).unwrap();
+    assert!(dir.path().join("runs.csv").is_file());
+}
+
+/// Every number `merge` reads from a run (best.json, time.json, checkpoint.json) is checked:
+/// out of its range, it is a one-line error naming the file, the field and the value, and
+/// nothing is merged. Slices that differ name the setting and both values, and a manifest's
+/// fields are named as the file names them, in short lines.
+#[test]
+fn merge_refuses_numbers_out_of_range_naming_file_field_and_value() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = two_slices(dir.path());
+    let out = dir.path().join("out");
+    let run = a.join("workspace0/method0");
+    let edit = |file: &str, f: &dyn Fn(&mut serde_json::Value)| {
+        let p = run.join(file);
+        let text = read(&p);
+        let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        f(&mut v);
+        std::fs::write(&p, serde_json::to_string(&v).unwrap()).unwrap();
+        text
+    };
+    type Edit = fn(&mut serde_json::Value);
+    let cases: [(&str, Edit, &str); 10] = [
+        (
+            "best.json",
+            |v| v["reachability"] = 1e308.into(),
+            "best.json: reachability = 1e308: must lie in [0, 1]",
+        ),
+        (
+            "best.json",
+            |v| v["reachability"] = (-0.5).into(),
+            "reachability = -0.5",
+        ),
+        (
+            "best.json",
+            |v| v["cost"] = (-1.0).into(),
+            "best.json: cost = -1: must be finite and not negative",
+        ),
+        (
+            "best.json",
+            |v| v["links_kept"] = 1000.into(),
+            "best.json: links_kept = 1000",
+        ),
+        (
+            "best.json",
+            |v| v["evaluations"] = 49.into(),
+            "best.json: evaluations = 49: the experiment makes at most 48",
+        ),
+        (
+            "best.json",
+            |v| v["design"]["links"][0]["a"] = 1e300.into(),
+            "best.json: design.links[0].a = 1e300",
+        ),
+        (
+            "time.json",
+            |v| v["elapsed_s"] = 1e308.into(),
+            "time.json: elapsed_s = 1e308",
+        ),
+        (
+            "checkpoint.json",
+            |v| v["history"][0]["elapsed_s"] = 1e300.into(),
+            "checkpoint.json: history[0].elapsed_s = 1e300",
+        ),
+        (
+            "checkpoint.json",
+            |v| v["history"][0]["best_reachability"] = 2.0.into(),
+            "checkpoint.json: history[0].best_reachability = 2",
+        ),
+        (
+            "checkpoint.json",
+            |v| v["history"][0]["best_cost"] = (-3.0).into(),
+            "checkpoint.json: history[0].best_cost = -3",
+        ),
+    ];
+    for (file, f, part) in cases {
+        let original = edit(file, &f);
+        merge_refused(&[&a, &b], &out, &[part]);
+        assert!(!out.exists(), "{part}: nothing may be written");
+        std::fs::write(run.join(file), original).unwrap();
+    }
+    // Slices of different experiments: the setting and both values, no debug output.
+    let m = a.join("experiment.json");
+    let original = read(&m);
+    let set = |f: &dyn Fn(&mut serde_json::Value)| {
+        let mut v: serde_json::Value = serde_json::from_str(&original).unwrap();
+        f(&mut v);
+        std::fs::write(&m, serde_json::to_string(&v).unwrap()).unwrap();
+    };
+    set(&|v| v["spec"]["time_limit"] = 6.0.into());
+    merge_refused(
+        &[&a, &b],
+        &out,
+        &[
+            "b/experiment.json: spec.time_limit = 600: is not the experiment of",
+            "(time_limit = 6)",
+        ],
+    );
+    set(&|v| v["spec"]["time_limit"] = (-1.0).into());
+    merge_refused(
+        &[&a, &b],
+        &out,
+        &["a/experiment.json: spec.time_limit = -1: must be positive"],
+    );
+    set(&|v| v["spec"]["runs"] = 0.into());
+    merge_refused(
+        &[&a, &b],
+        &out,
+        &["a/experiment.json: spec.runs = 0: must be from 1"],
+    );
+    set(&|v| v["spec"]["runs"] = 100_000.into());
+    merge_refused(
+        &[&a, &b],
+        &out,
+        &[
+            "workspaces = [0]",
+            "holds [0, 1, 2, 3, 4, … and 49995 more]",
+        ],
+    );
+    std::fs::write(&m, &original).unwrap();
+    merge(&[a, b], &out).unwrap();
+}

@@ -312,28 +312,78 @@ pub fn run_experiment(
 impl ExperimentSpec {
     /// Checks the settings; errors name the option (`--time-limit`, …) and the value.
     pub fn validate(&self) -> Result<()> {
-        if !(self.time_limit.is_finite() && self.time_limit > 0.0) {
+        self.check(&|field| format!("--{}", field.replace('_', "-")))
+    }
+
+    /// Checks the settings as an `experiment.json` holds them; errors name its field
+    /// (`spec.time_limit`, …) and the value.
+    pub fn validate_manifest(&self) -> Result<()> {
+        self.check(&|field| format!("spec.{field}"))
+    }
+
+    /// Checks the settings, naming each field as `name` gives it.
+    fn check(&self, name: &dyn Fn(&str) -> String) -> Result<()> {
+        use crate::limits::MAX_SECONDS;
+        if !(self.time_limit.is_finite() && self.time_limit > 0.0 && self.time_limit <= MAX_SECONDS)
+        {
             return Err(crate::Error::invalid(
-                "--time-limit",
-                self.time_limit,
-                "must be positive and finite",
+                name("time_limit"),
+                crate::error::Num(self.time_limit),
+                format!("must be positive and at most {MAX_SECONDS} s"),
             ));
         }
         if self.evaluations == Some(0) {
             return Err(crate::Error::invalid(
-                "--evaluations",
+                name("evaluations"),
                 0,
                 "must be at least 1",
             ));
         }
         if !(1..=MAX_SHARDS).contains(&self.runs) {
             return Err(crate::Error::invalid(
-                "--runs",
+                name("runs"),
                 self.runs,
                 format!("must be from 1 to {MAX_SHARDS}"),
             ));
         }
         Ok(())
+    }
+
+    /// The first setting in which `self` differs from `other`: its field name and the two
+    /// values.
+    fn difference(&self, other: &ExperimentSpec) -> Option<(&'static str, String, String)> {
+        let evaluations = |e: Option<u64>| e.map_or("none".to_string(), |n| n.to_string());
+        let fields = [
+            (
+                "preset",
+                self.preset.name().to_string(),
+                other.preset.name().to_string(),
+            ),
+            ("runs", self.runs.to_string(), other.runs.to_string()),
+            (
+                "time_limit",
+                crate::error::Num(self.time_limit).to_string(),
+                crate::error::Num(other.time_limit).to_string(),
+            ),
+            (
+                "evaluations",
+                evaluations(self.evaluations),
+                evaluations(other.evaluations),
+            ),
+            ("seed", self.seed.to_string(), other.seed.to_string()),
+        ];
+        fields.into_iter().find(|(_, a, b)| a != b)
+    }
+}
+
+/// A list of indices for a message: whole when short, else its first few and how many more.
+fn brief(v: &[usize]) -> String {
+    const SHOWN: usize = 5;
+    let head: Vec<String> = v.iter().take(SHOWN).map(usize::to_string).collect();
+    if v.len() <= SHOWN {
+        format!("[{}]", head.join(", "))
+    } else {
+        format!("[{}, … and {} more]", head.join(", "), v.len() - SHOWN)
     }
 }
 
@@ -354,7 +404,7 @@ pub fn read_manifest(dir: &Path) -> Result<Manifest> {
         file: path.clone(),
         message: e.to_string(),
     })?;
-    m.spec.validate().map_err(|e| e.in_file(&path))?;
+    m.spec.validate_manifest().map_err(|e| e.in_file(&path))?;
     // The slice as `--shard` accepts it, before its workspaces are computed from it.
     if let Some(why) = m.shard.problem() {
         return Err(crate::Error::invalid("shard", m.shard, why).in_file(&path));
@@ -363,10 +413,12 @@ pub fn read_manifest(dir: &Path) -> Result<Manifest> {
     if m.workspaces != expected {
         return Err(crate::Error::invalid(
             "workspaces",
-            format!("{:?}", m.workspaces),
+            brief(&m.workspaces),
             format!(
-                "shard {} of {} runs holds {expected:?}",
-                m.shard, m.spec.runs
+                "shard {} of {} runs holds {}",
+                m.shard,
+                m.spec.runs,
+                brief(&expected)
             ),
         )
         .in_file(&path));
@@ -387,6 +439,13 @@ pub fn merge(dirs: &[std::path::PathBuf], out: &Path) -> Result<Vec<RunRecord>> 
             "give the folders of the slices to merge",
         ));
     };
+    // The slices' folders are only read: the tables written into one would replace its own.
+    let slices: Vec<(&Path, String)> = dirs
+        .iter()
+        .map(|d| (d.as_path(), format!("the slice folder {}", d.display())))
+        .collect();
+    let slices: Vec<(&Path, &str)> = slices.iter().map(|(d, w)| (*d, w.as_str())).collect();
+    crate::io::check_dir_outside("--out", out, &slices)?;
     let manifests: Vec<Manifest> = dirs
         .iter()
         .map(|d| read_manifest(d))
@@ -395,14 +454,13 @@ pub fn merge(dirs: &[std::path::PathBuf], out: &Path) -> Result<Vec<RunRecord>> 
     let mut owner: Vec<Option<usize>> = vec![None; spec.runs];
     for (i, m) in manifests.iter().enumerate() {
         let path = dirs[i].join(MANIFEST);
-        if m.spec != spec {
+        if let Some((field, mine, first)) = m.spec.difference(&spec) {
             return Err(crate::Error::invalid(
-                "spec",
-                format!("{:?}", m.spec),
+                format!("spec.{field}"),
+                mine,
                 format!(
-                    "is not the experiment of {} ({:?})",
+                    "is not the experiment of {} ({field} = {first})",
                     first_dir.join(MANIFEST).display(),
-                    spec
                 ),
             )
             .in_file(&path));
@@ -446,8 +504,19 @@ pub fn merge(dirs: &[std::path::PathBuf], out: &Path) -> Result<Vec<RunRecord>> 
                     file: best.clone(),
                     message: e.to_string(),
                 })?;
+            check_summary(&summary).map_err(|e| e.in_file(&best))?;
+            if let Some(n) = spec.evaluations.filter(|&n| summary.evaluations > n) {
+                return Err(crate::Error::invalid(
+                    "evaluations",
+                    summary.evaluations,
+                    format!("the experiment makes at most {n} per run"),
+                )
+                .in_file(&best));
+            }
             summary.elapsed_s = read_elapsed(&run_dir.join(super::runner::files::TIME))?;
             let history = Runner::read_checkpoint(&run_dir)?.history;
+            check_history(&history)
+                .map_err(|e| e.in_file(run_dir.join(super::runner::files::CHECKPOINT)))?;
             records.push(RunRecord {
                 workspace: w,
                 method: k,
@@ -594,12 +663,100 @@ fn read_elapsed(path: &Path) -> Result<f64> {
         message: e.to_string(),
     })?;
     match v["elapsed_s"].as_f64() {
-        Some(s) if s.is_finite() && s >= 0.0 => Ok(s),
+        Some(s) if (0.0..=crate::limits::MAX_SECONDS).contains(&s) => Ok(s),
         _ => Err(crate::Error::invalid(
             "elapsed_s",
-            v["elapsed_s"].to_string(),
-            "must be a finite number of seconds ≥ 0",
+            v["elapsed_s"].as_f64().map_or_else(
+                || v["elapsed_s"].to_string(),
+                |x| crate::error::Num(x).to_string(),
+            ),
+            format!(
+                "must be a number of seconds from 0 to {}",
+                crate::limits::MAX_SECONDS
+            ),
         )
         .in_file(path)),
     }
+}
+
+/// A reachability must lie in [0, 1].
+fn check_reachability(field: &str, r: f64) -> Result<()> {
+    if (0.0..=1.0).contains(&r) {
+        Ok(())
+    } else {
+        Err(crate::Error::invalid(
+            field,
+            crate::error::Num(r),
+            "must lie in [0, 1]",
+        ))
+    }
+}
+
+/// A cost (paper Eq. 23, whose weights are not negative) must be finite and not negative.
+fn check_cost(field: &str, c: f64) -> Result<()> {
+    if c.is_finite() && c >= 0.0 {
+        Ok(())
+    } else {
+        Err(crate::Error::invalid(
+            field,
+            crate::error::Num(c),
+            "must be finite and not negative",
+        ))
+    }
+}
+
+/// Links and joints kept must be counts a design can have: at most its `links` links, each with
+/// six axes, within [`crate::limits::MAX_LINKS`].
+fn check_kept(field: &str, n: usize, links: usize) -> Result<()> {
+    let max = links.min(crate::limits::MAX_LINKS) * if field.contains("joint") { 6 } else { 1 };
+    if n <= max {
+        Ok(())
+    } else {
+        Err(crate::Error::invalid(
+            field,
+            n,
+            format!("must be at most {max} ({links} links)"),
+        ))
+    }
+}
+
+/// Checks the figures of a run's `best.json` that `merge` tabulates: its design, `R` in
+/// [0, 1], a finite cost ≥ 0 and links and joints kept that the design can have.
+fn check_summary(s: &RunSummary) -> Result<()> {
+    s.design.validate().map_err(|e| match e {
+        crate::Error::InvalidValue {
+            field,
+            value,
+            reason,
+        } => crate::Error::invalid(format!("design.{field}"), value, reason),
+        e => e,
+    })?;
+    check_reachability("reachability", s.reachability)?;
+    check_cost("cost", s.cost)?;
+    let links = s.design.links.len();
+    check_kept("links_kept", s.links_kept, links)?;
+    check_kept("joints_kept", s.joints_kept, links)?;
+    Ok(())
+}
+
+/// Checks the rows of a run's history that `merge` averages: seconds from 0 to
+/// [`crate::limits::MAX_SECONDS`], `R` in [0, 1], a finite cost ≥ 0 and counts within
+/// [`crate::limits::MAX_LINKS`] links.
+fn check_history(history: &[HistoryRow]) -> Result<()> {
+    use crate::limits::{MAX_LINKS, MAX_SECONDS};
+    for (i, row) in history.iter().enumerate() {
+        let field = |f: &str| format!("history[{i}].{f}");
+        if !(0.0..=MAX_SECONDS).contains(&row.elapsed_s) {
+            return Err(crate::Error::invalid(
+                field("elapsed_s"),
+                crate::error::Num(row.elapsed_s),
+                format!("must be a number of seconds from 0 to {MAX_SECONDS}"),
+            ));
+        }
+        check_reachability(&field("best_reachability"), row.best_reachability)?;
+        check_cost(&field("best_cost"), row.best_cost)?;
+        check_kept(&field("best_links"), row.best_links, MAX_LINKS)?;
+        check_kept(&field("best_joints"), row.best_joints, MAX_LINKS)?;
+    }
+    Ok(())
 }
