@@ -227,3 +227,93 @@ fn reach_tree_is_the_planners_tree_and_a_broken_tree_is_refused() {
     );
     assert!(!page.exists());
 }
+
+/// The numbers of a reach report are checked, not only its shape: `R` outside [0, 1] or not
+/// the share of its targets reached, an `l_max` of 1.8e19, negative errors, end effectors and
+/// tree nodes at 1e308 are one-line errors naming the file, the field and the value, and no
+/// page is written.
+#[test]
+fn a_reach_report_with_numbers_out_of_range_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = scenario("paper-2d");
+    let report = dir.path().join("reach.json");
+    let o = kinsynth(&[
+        "reach".as_ref(),
+        file.as_os_str(),
+        "--json".as_ref(),
+        report.as_os_str(),
+        "--tree".as_ref(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let good: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    type Edit = fn(&mut serde_json::Value);
+    let cases: [(Edit, &str); 9] = [
+        (
+            |v| v["reachability"] = 1.8e19.into(),
+            "reachability = 1.8e19: must lie in [0, 1]",
+        ),
+        (
+            |v| v["reachability"] = 0.5.into(),
+            "reachability = 0.5: 10 of its 10 targets are reached",
+        ),
+        (
+            |v| v["l_max"] = 1.8e19.into(),
+            "l_max = 1.8e19: must be positive",
+        ),
+        (|v| v["l_max"] = 0.0.into(), "l_max = 0: must be positive"),
+        (
+            |v| v["targets"][0]["error"] = (-9.2e18).into(),
+            "targets[0].error = -9.2e18: must be finite, not negative",
+        ),
+        (
+            |v| v["targets"][2]["position_error"] = (-1.0).into(),
+            "targets[2].position_error = -1",
+        ),
+        (
+            |v| v["targets"][1]["end_effector"][1] = 1e308.into(),
+            "targets[1].end_effector = [",
+        ),
+        (
+            |v| v["tree"]["end_effectors"][1][0] = 1e308.into(),
+            "tree.end_effectors[1] = [1e308",
+        ),
+        (
+            |v| v["targets"][3]["orientation_error"] = 7.0.into(),
+            "targets[3].orientation_error = 7",
+        ),
+    ];
+    let page = dir.path().join("page.html");
+    let bad = dir.path().join("bad.json");
+    for (edit, part) in cases {
+        let mut v = good.clone();
+        edit(&mut v);
+        std::fs::write(&bad, v.to_string()).unwrap();
+        let o = kinsynth(&[
+            "view".as_ref(),
+            file.as_os_str(),
+            "--reach".as_ref(),
+            bad.as_os_str(),
+            "-o".as_ref(),
+            page.as_os_str(),
+        ]);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{part}: {stderr}");
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        assert!(
+            stderr.contains(&format!("bad.json: {part}")),
+            "`{part}` missing from: {stderr}"
+        );
+        assert!(!page.exists(), "no page may be written");
+    }
+    // The report as written is shown.
+    let o = kinsynth(&[
+        "view".as_ref(),
+        file.as_os_str(),
+        "--reach".as_ref(),
+        report.as_os_str(),
+        "-o".as_ref(),
+        page.as_os_str(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}

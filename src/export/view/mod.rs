@@ -254,9 +254,105 @@ pub const MAX_PATH_POINTS: usize = 200_000;
 /// Most tree nodes a report may carry for the page to draw.
 pub const MAX_TREE_NODES: usize = 1_000_000;
 
+/// Largest magnitude of a coordinate in a report (an end effector, a tree node), in metres:
+/// farther than any design reaches (its base within ±[`crate::limits::MAX_LENGTH`] m, at most
+/// [`crate::limits::MAX_LINKS`] links whose `a`, `d` and three prismatic axes each reach at
+/// most that far, and its tool as far again).
+pub const MAX_COORDINATE: f64 = 1e6;
+
+/// Checks the figures of a report: `R` in [0, 1] and the share of its targets reached,
+/// `l_max` positive and at most [`crate::limits::MAX_SETTING`], errors finite and not negative
+/// (angles at most π), end effectors and tree nodes within ±[`MAX_COORDINATE`] m, tool
+/// rotations with entries in [−1, 1].
+fn check_figures(report: &ReachReport) -> std::result::Result<(), (String, String, String)> {
+    use crate::error::{fmt_list, Num};
+    use std::f64::consts::PI;
+    let bad = |field: String, value: String, why: &str| Err((field, value, why.to_string()));
+    let n = report.targets.len();
+    let share = if n == 0 {
+        0.0
+    } else {
+        report.reached() as f64 / n as f64
+    };
+    if !(0.0..=1.0).contains(&report.reachability) {
+        return bad(
+            "reachability".into(),
+            Num(report.reachability).to_string(),
+            "must lie in [0, 1]",
+        );
+    }
+    if (report.reachability - share).abs() > 1e-9 {
+        return Err((
+            "reachability".into(),
+            Num(report.reachability).to_string(),
+            format!("{} of its {n} targets are reached", report.reached()),
+        ));
+    }
+    let max_setting = crate::limits::MAX_SETTING;
+    if !(report.l_max > 0.0 && crate::limits::within(report.l_max, max_setting)) {
+        return Err((
+            "l_max".into(),
+            Num(report.l_max).to_string(),
+            format!("must be positive and at most {max_setting}"),
+        ));
+    }
+    let point = |p: &[f64; 3]| p.iter().all(|&v| crate::limits::within(v, MAX_COORDINATE));
+    let within_m = format!("must be three finite coordinates within ±{MAX_COORDINATE} m");
+    for (i, t) in report.targets.iter().enumerate() {
+        let field = |f: &str| format!("targets[{i}].{f}");
+        if !point(&t.end_effector) {
+            return Err((field("end_effector"), fmt_list(&t.end_effector), within_m));
+        }
+        for (name, v, max) in [
+            ("error", Some(t.error), 2.0 * MAX_COORDINATE),
+            (
+                "position_error",
+                Some(t.position_error),
+                2.0 * MAX_COORDINATE,
+            ),
+            ("orientation_error", t.orientation_error, PI + 1e-9),
+            ("approach_error", t.approach_error, PI + 1e-9),
+            ("orientation_tolerance", t.orientation_tolerance, PI + 1e-9),
+        ] {
+            if let Some(v) = v.filter(|v| !(0.0..=max).contains(v)) {
+                return Err((
+                    field(name),
+                    Num(v).to_string(),
+                    format!("must be finite, not negative and at most {}", Num(max)),
+                ));
+            }
+        }
+        if let Some(r) = &t.tool_rotation {
+            if !r
+                .iter()
+                .flatten()
+                .all(|v| (-1.0 - 1e-9..=1.0 + 1e-9).contains(v))
+            {
+                let flat: Vec<f64> = r.iter().flatten().copied().collect();
+                return bad(
+                    field("tool_rotation"),
+                    fmt_list(&flat),
+                    "must be a rotation matrix (every entry in [-1, 1])",
+                );
+            }
+        }
+    }
+    if let Some(tree) = &report.tree {
+        if let Some(j) = tree.end_effectors.iter().position(|e| !point(e)) {
+            return Err((
+                format!("tree.end_effectors[{j}]"),
+                fmt_list(&tree.end_effectors[j]),
+                within_m,
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Reads a reachability report (`kinsynth reach --json`, or a run's `reach.json`) to show with
 /// a robot of `dof` free axes among `tasks`, checking that it belongs to them: one target per
-/// task, at the task's point, each path point with `dof` values, all finite. Errors name the
+/// task, at the task's point, each path point with `dof` values, all finite; and that its
+/// figures are in range (`R`, `l_max`, errors, end effectors and tree nodes). Errors name the
 /// file, the field (`targets[2].path.points[5]`) and the value.
 pub fn load_reach(path: &Path, tasks: &[nalgebra::Point3<f64>], dof: usize) -> Result<ReachReport> {
     use crate::error::Error;
@@ -283,6 +379,7 @@ pub fn load_reach(path: &Path, tasks: &[nalgebra::Point3<f64>], dof: usize) -> R
             format!("the scenario has {} tasks", tasks.len()),
         ));
     }
+    check_figures(&report).map_err(|(field, value, why)| bad(field, value, why))?;
     let mut total = 0usize;
     for (i, t) in report.targets.iter().enumerate() {
         if t.index != i {
