@@ -398,8 +398,10 @@ fn bad_budgets_are_refused_naming_the_flag_and_the_value() {
             "-5",
             "must be a finite, non-negative",
         ),
-        ("--lmax", "-1", "must be positive and finite"),
-        ("--lmax", "inf", "must be positive and finite"),
+        ("--lmax", "-1", "must be positive and at most 1000000"),
+        ("--lmax", "inf", "must be positive and at most 1000000"),
+        // As the scenario's planner.l_max.
+        ("--lmax", "1e308", "must be positive and at most 1000000"),
         (
             "--recheck-seeds",
             "100000",

@@ -64,15 +64,16 @@ pub fn override_planner(
 }
 
 /// A step bound given as `--lmax`: refused, naming the flag and the value, unless it is
-/// positive and finite.
+/// positive and at most [`kinsynth::limits::MAX_SETTING`], as a scenario's `planner.l_max`.
 pub fn checked_lmax(l: f64) -> Result<f64, kinsynth::Error> {
-    if l.is_finite() && l > 0.0 {
+    use kinsynth::limits::{within, MAX_SETTING};
+    if l > 0.0 && within(l, MAX_SETTING) {
         Ok(l)
     } else {
         Err(kinsynth::Error::invalid(
             "--lmax",
-            l,
-            "must be positive and finite",
+            kinsynth::error::Num(l),
+            format!("must be positive and at most {MAX_SETTING}"),
         ))
     }
 }
