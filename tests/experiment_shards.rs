@@ -33,6 +33,30 @@ fn without_times(runs_csv: &str) -> Vec<String> {
         .collect()
 }
 
+/// Workspace `w` has the seed `seed + w`: a first seed whose workspaces would wrap past the
+/// largest seed to 0 is refused, naming the flag and the value.
+#[test]
+fn every_workspace_seed_must_exist() {
+    for (seed, runs, ok) in [
+        (u64::MAX, 1, true),
+        (u64::MAX, 2, false),
+        (u64::MAX - 9, 10, true),
+        (u64::MAX - 8, 10, false),
+    ] {
+        let r = ExperimentSpec {
+            seed,
+            runs,
+            ..spec()
+        }
+        .validate();
+        assert_eq!(r.is_ok(), ok, "{seed} {runs}: {r:?}");
+        if let Err(e) = r {
+            let e = e.to_string();
+            assert!(e.contains(&format!("--seed = {seed}")), "{e}");
+        }
+    }
+}
+
 /// An experiment runs at least one workspace and at most 100,000 (`--runs 0` printed medians
 /// of nothing).
 #[test]

@@ -236,7 +236,7 @@ pub fn run_experiment(
         source,
     })?;
     for w in workspaces.clone() {
-        let ws_seed = seed + w as u64;
+        let ws_seed = seed.saturating_add(w as u64); // within range: `validate`
         let spec_w = preset::generate(preset, ws_seed);
         let dir = out.join(format!("workspace{w}"));
         std::fs::create_dir_all(&dir).map_err(|source| crate::Error::Write {
@@ -344,6 +344,18 @@ impl ExperimentSpec {
                 name("runs"),
                 self.runs,
                 format!("must be from 1 to {MAX_SHARDS}"),
+            ));
+        }
+        // Workspace `w` has the seed `seed + w`: every one must exist (no wrapping to 0).
+        if self.seed.checked_add(self.runs as u64 - 1).is_none() {
+            return Err(crate::Error::invalid(
+                name("seed"),
+                self.seed,
+                format!(
+                    "must be at most {} for {} runs (workspace w has the seed seed + w)",
+                    u64::MAX - (self.runs as u64 - 1),
+                    self.runs
+                ),
             ));
         }
         Ok(())
