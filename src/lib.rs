@@ -12,6 +12,7 @@ pub mod limits;
 pub mod optimize;
 pub mod planning;
 pub mod scenario;
+pub mod strict;
 pub mod world;
 
 pub use design::{Design, DesignSpace};

@@ -1212,4 +1212,88 @@ fn an_output_that_is_an_input_is_refused_before_anything_is_written() {
     ]);
     assert_eq!(code, Some(0), "{stderr}");
     assert!(page.is_file());
+
+/// A table given as an array is refused wherever a table is expected, at any depth, in a
+/// scenario, a design and a `best.json`: serde would otherwise take the elements for the
+/// fields in order and ignore the rest. Arrays where arrays belong keep working.
+#[test]
+fn tables_given_as_arrays_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    for (text, field) in [
+        (
+            ROBOT.replace(
+                "ry = { min = -3.0, max = 3.0 }",
+                "ry = [-1.0, 1.0, 99.0, \"ignored\", true]",
+            ),
+            "robot.uniform.axes.ry",
+        ),
+        (
+            format!("{ROBOT}[[robot.link]]\nindex = 1\naxes = {{ rz = [1.0, 2.0] }}\n"),
+            "robot.link[0].axes.rz",
+        ),
+        (
+            ROBOT.replace("uniform = {", "base = [[0, 0, 0]]\nuniform = {"),
+            "robot.base",
+        ),
+        (format!("objective = [1.0, 2.0, 3.0]\n{ROBOT}"), "objective"),
+        (format!("planner = []\n{ROBOT}"), "planner"),
+        (
+            format!("{ROBOT}[planner]\nschedule = [[1.2, 0.4], [200, 500]]\n"),
+            "planner.schedule",
+        ),
+        (
+            format!("{ROBOT}[optimizer]\nga = [1, 2, 3]\n"),
+            "optimizer.ga",
+        ),
+        (
+            format!("{ROBOT}[optimizer]\nmigration = [10, 2]\n"),
+            "optimizer.migration",
+        ),
+        (
+            format!("{ROBOT}[[task]]\npoint = [0.4, 0.0, 0.3]\norientation = [[0, 0, 0]]\n"),
+            "task[0].orientation",
+        ),
+        (format!("task = [[[0.5, 0.0, 0.3]]]\n{ROBOT}"), "task[0]"),
+    ] {
+        let text = match text.contains("[[task]]") || text.contains("task = ") {
+            true => text,
+            false => format!("{text}{TASK}"),
+        };
+        let p = write(dir.path(), "t.toml", &text);
+        let e = rejected(&check(&p), &["t.toml", &format!(": {field}: ")]);
+        assert!(e.contains("invalid type: sequence, expected struct"), "{e}");
+    }
+    let cell = repo("examples/scenarios/paper-2d.toml");
+    let good = design("0.3", "[-1, 1]", 2);
+    let bad_link = good.replacen(r#"{"a": 0.3, "axes": {"ry": [-1, 1]}}"#, "[]", 1);
+    let bad_base = good.replacen('{', r#"{"base": [[0, 0, 0], [0, 0, 0]], "#, 1);
+    let bad_axes = good.replacen(r#"{"ry": [-1, 1]}"#, "[[-1, 1]]", 1);
+    let best = format!(r#"{{"design": {good}, "seed": 1, "stream": 0, "planner": [0.5, 0.1]}}"#);
+    for (name, text, field) in [
+        ("d.json", bad_link, "links[0]"),
+        ("d.json", bad_base, "base"),
+        ("d.json", bad_axes, "links[0].axes"),
+        ("best.json", best, "planner"),
+    ] {
+        let p = write(dir.path(), name, &text);
+        let e = rejected(
+            &[
+                "reach".as_ref(),
+                cell.as_os_str(),
+                "--design".as_ref(),
+                p.as_os_str(),
+            ],
+            &[&format!("{name}: {field}: ")],
+        );
+        assert!(e.contains("invalid type: sequence, expected struct"), "{e}");
+    }
+    // Arrays where the format has arrays still read.
+    let p = write(dir.path(), "d.json", &good);
+    let (code, stderr) = run(&[
+        "reach".as_ref(),
+        cell.as_os_str(),
+        "--design".as_ref(),
+        p.as_os_str(),
+    ]);
+    assert_eq!(code, Some(0), "{stderr}");
 }

@@ -628,6 +628,36 @@ fn mutated_checkpoints() {
     }
 }
 
+/// A checkpoint's table given as an array is refused, naming the field, rather than read as
+/// the struct's fields in order (an empty array as every default).
+#[test]
+fn regression_checkpoint_table_given_as_array_is_refused() {
+    let run = short_run();
+    let dir = run.path().join("run");
+    let path = dir.join("checkpoint.json");
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    v["planner"] = serde_json::json!([]);
+    std::fs::write(&path, v.to_string()).unwrap();
+    let e = Runner::read_checkpoint(&dir).unwrap_err().to_string();
+    assert_one_line("checkpoint", 0, "planner = []", &e, &path);
+    assert!(
+        e.contains("checkpoint.json: planner: invalid type: sequence, expected struct"),
+        "{e}"
+    );
+    let o = Command::new(BIN)
+        .args(["optimize", "--quiet", "--resume"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.lines().count() == 1 && stderr.contains("planner: invalid type: sequence"),
+        "{stderr}"
+    );
+}
+
 // Regression tests: crash cases found by the fuzzer (and by hand), kept by name.
 
 /// Writes `text` as `name` into a new temporary directory.

@@ -66,7 +66,8 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
     // Its wall-clock time is in the time.json beside it, when there is one.
     let summary: Option<kinsynth::optimize::RunSummary> = args.design.as_ref().and_then(|p| {
         let text = kinsynth::limits::read_text(p, kinsynth::limits::MAX_TEXT_FILE_BYTES).ok()?;
-        let mut summary: kinsynth::optimize::RunSummary = serde_json::from_str(&text).ok()?;
+        let mut summary: kinsynth::optimize::RunSummary =
+            kinsynth::strict::deserialize(&mut serde_json::Deserializer::from_str(&text)).ok()?;
         let time = p.with_file_name(kinsynth::optimize::runner::files::TIME);
         if let Some(t) = kinsynth::limits::read_text(&time, kinsynth::limits::MAX_TEXT_FILE_BYTES)
             .ok()

@@ -317,7 +317,7 @@ impl Design {
             }
             v => v,
         };
-        let design: Design = serde_path_to_error::deserialize(value).map_err(|e| Error::Parse {
+        let design: Design = crate::strict::deserialize(value).map_err(|e| Error::Parse {
             file: path.to_path_buf(),
             message: format!("{}: {}", e.path(), e.inner()),
         })?;

@@ -115,7 +115,7 @@ impl Asa {
 
     /// Restores an annealer from [`Optimizer::save`] output.
     pub fn load(state: serde_json::Value) -> serde_json::Result<Self> {
-        serde_json::from_value(state)
+        crate::strict::deserialize(state).map_err(serde_path_to_error::Error::into_inner)
     }
 
     /// The rate `c` that brings a temperature down by `temperature_ratio` at

@@ -409,13 +409,11 @@ pub fn read_manifest(dir: &Path) -> Result<Manifest> {
                 source,
             }
         })?;
-    let m: Manifest = serde_path_to_error::deserialize(&mut serde_json::Deserializer::from_str(
-        &text,
-    ))
-    .map_err(|e| crate::Error::Parse {
-        file: path.clone(),
-        message: e.to_string(),
-    })?;
+    let m: Manifest = crate::strict::deserialize(&mut serde_json::Deserializer::from_str(&text))
+        .map_err(|e| crate::Error::Parse {
+            file: path.clone(),
+            message: e.to_string(),
+        })?;
     m.spec.validate_manifest().map_err(|e| e.in_file(&path))?;
     // The slice as `--shard` accepts it, before its workspaces are computed from it.
     if let Some(why) = m.shard.problem() {
@@ -512,10 +510,11 @@ pub fn merge(dirs: &[std::path::PathBuf], out: &Path) -> Result<Vec<RunRecord>> 
                     source,
                 })?;
             let mut summary: RunSummary =
-                serde_json::from_str(&text).map_err(|e| crate::Error::Parse {
-                    file: best.clone(),
-                    message: e.to_string(),
-                })?;
+                crate::strict::deserialize(&mut serde_json::Deserializer::from_str(&text))
+                    .map_err(|e| crate::Error::Parse {
+                        file: best.clone(),
+                        message: e.to_string(),
+                    })?;
             check_summary(&summary).map_err(|e| e.in_file(&best))?;
             if let Some(n) = spec.evaluations.filter(|&n| summary.evaluations > n) {
                 return Err(crate::Error::invalid(

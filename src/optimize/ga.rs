@@ -108,7 +108,7 @@ impl Ga {
 
     /// Restores a GA from [`Optimizer::save`] output.
     pub fn load(state: serde_json::Value) -> serde_json::Result<Self> {
-        serde_json::from_value(state)
+        crate::strict::deserialize(state).map_err(serde_path_to_error::Error::into_inner)
     }
 
     fn tournament(&self, rng: &mut ChaCha8Rng) -> usize {

@@ -120,7 +120,7 @@ impl Pso {
 
     /// Restores a swarm from [`Optimizer::save`] output.
     pub fn load(state: serde_json::Value) -> serde_json::Result<Self> {
-        serde_json::from_value(state)
+        crate::strict::deserialize(state).map_err(serde_path_to_error::Error::into_inner)
     }
 
     /// CLPSO's learning probability of particle `i` of `n`.

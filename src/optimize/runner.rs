@@ -383,7 +383,7 @@ pub(crate) fn initial_designs(space: &crate::design::DesignSpace) -> Vec<Vec<f64
 fn from_value_at<T: serde::de::DeserializeOwned>(
     value: serde_json::Value,
 ) -> std::result::Result<T, String> {
-    serde_path_to_error::deserialize(value).map_err(|e| {
+    crate::strict::deserialize(value).map_err(|e| {
         let path = e.path().to_string();
         if path == "." {
             format!(": {}", e.inner())

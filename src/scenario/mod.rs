@@ -276,8 +276,7 @@ impl Scenario {
             parse_error(m.trim_end().to_string())
         };
         let de = toml::de::Deserializer::parse(text).map_err(|e| describe(None, &e))?;
-        serde_path_to_error::deserialize(de)
-            .map_err(|e| describe(Some(e.path().to_string()), e.inner()))
+        crate::strict::deserialize(de).map_err(|e| describe(Some(e.path().to_string()), e.inner()))
     }
 
     /// Validates a raw scenario and builds the design space and workspace; mesh files are

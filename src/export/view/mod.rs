@@ -364,11 +364,10 @@ pub fn load_reach(path: &Path, tasks: &[nalgebra::Point3<f64>], dof: usize) -> R
             }
         })?;
     let mut de = serde_json::Deserializer::from_str(&text);
-    let report: ReachReport =
-        serde_path_to_error::deserialize(&mut de).map_err(|e| Error::Parse {
-            file: path.to_path_buf(),
-            message: format!("{}: {}", e.path(), e.inner()),
-        })?;
+    let report: ReachReport = crate::strict::deserialize(&mut de).map_err(|e| Error::Parse {
+        file: path.to_path_buf(),
+        message: format!("{}: {}", e.path(), e.inner()),
+    })?;
     let bad = |field: String, value: String, reason: String| {
         Error::invalid(field, value, reason).in_file(path)
     };
