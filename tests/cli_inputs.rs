@@ -1297,3 +1297,74 @@ fn tables_given_as_arrays_are_refused() {
     ]);
     assert_eq!(code, Some(0), "{stderr}");
 }
+
+/// A URDF arm of three revolute joints `j1`–`j3` over links `base_link`, `l1`–`l3`, with
+/// `extra` added before `</robot>` and `base_geometry` as the base link's collision geometry.
+fn three_joint_urdf(base_geometry: &str, extra: &str) -> String {
+    let link = |name: &str, geometry: &str| {
+        format!(
+            "<link name=\"{name}\"><collision><origin xyz=\"0 0 0.05\"/><geometry>{geometry}</geometry></collision></link>\n"
+        )
+    };
+    let cylinder = "<cylinder radius=\"0.03\" length=\"0.1\"/>";
+    let joint = |name: &str, parent: &str, child: &str| {
+        format!(
+            "<joint name=\"{name}\" type=\"revolute\"><parent link=\"{parent}\"/><child link=\"{child}\"/>\
+             <origin xyz=\"0.3 0 0\"/><axis xyz=\"0 1 0\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/></joint>\n"
+        )
+    };
+    format!(
+        "<?xml version=\"1.0\"?>\n<robot name=\"r\">\n{}{}{}{}{}{}{}{extra}</robot>\n",
+        link("base_link", base_geometry),
+        link("l1", cylinder),
+        link("l2", cylinder),
+        link("l3", cylinder),
+        joint("j1", "base_link", "l1"),
+        joint("j2", "l1", "l2"),
+        joint("j3", "l2", "l3"),
+    )
+}
+
+fn reach_urdf<'a>(cell: &'a Path, urdf: &'a Path) -> Vec<&'a OsStr> {
+    vec![
+        "reach".as_ref(),
+        cell.as_os_str(),
+        "--urdf".as_ref(),
+        urdf.as_os_str(),
+    ]
+}
+
+/// Two joints or two links of one name are refused: the chain, paths, trajectories and SRDF
+/// pairs are keyed by these names.
+#[test]
+fn urdf_names_given_twice_are_refused() {
+    let cell = repo("examples/scenarios/ur5-cell.toml");
+    let dir = tempfile::tempdir().unwrap();
+    let cylinder = "<cylinder radius=\"0.03\" length=\"0.1\"/>";
+    let good = three_joint_urdf(cylinder, "");
+    let twin_joint = good.replacen("joint name=\"j2\"", "joint name=\"j1\"", 1);
+    let twin_link = three_joint_urdf(
+        cylinder,
+        "<link name=\"l2\"><collision><geometry><sphere radius=\"0.1\"/></geometry></collision></link>\n",
+    );
+    for (name, text, parts) in [
+        (
+            "joints.urdf",
+            twin_joint,
+            ["lines 7 and 8", "two <joint> elements are named 'j1'"],
+        ),
+        (
+            "links.urdf",
+            twin_link,
+            ["lines 5 and 10", "two <link> elements are named 'l2'"],
+        ),
+    ] {
+        let p = write(dir.path(), name, &text);
+        let mut all = vec![name, "not a valid URDF"];
+        all.extend(parts);
+        rejected(&reach_urdf(&cell, &p), &all);
+    }
+    let p = write(dir.path(), "good.urdf", &good);
+    let (code, stderr) = run(&reach_urdf(&cell, &p));
+    assert_eq!(code, Some(0), "{stderr}");
+}

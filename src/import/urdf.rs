@@ -9,7 +9,7 @@
 //!   through the leading fixed joints whose child link has no `<collision>`.
 //! - Supported joints: `revolute`, `prismatic` (limits from `<limit>`, which must be finite with
 //!   `lower < upper`), `continuous` (range `[−π, π]`) and `fixed`. `floating`, `planar`,
-//!   `spherical` and `mimic` joints are errors.
+//!   `spherical` and `mimic` joints are errors. Link names and joint names are unique.
 //! - Each moving joint is a link of the chain: a fixed transform (the fixed joints since the
 //!   previous moving joint, folded together, then the joint's origin) and one free axis. An axis
 //!   along +x, +y or +z maps to that axis (`Rx`…`Tz`); any other axis is turned onto local z by
@@ -120,7 +120,10 @@ pub fn read_urdf(path: &Path) -> Result<urdf_rs::Robot> {
             locate_fault(&text, &e.to_string()).unwrap_or_else(|| e.to_string())
         ),
     })?;
-    match non_finite(&text) {
+    let fault = roxmltree::Document::parse(&text)
+        .ok()
+        .and_then(|doc| non_finite(&doc).or_else(|| repeated_name(&doc)));
+    match fault {
         Some(fault) => Err(Error::Parse {
             file: path.to_path_buf(),
             message: format!("not a valid URDF: {fault}"),
@@ -129,10 +132,35 @@ pub fn read_urdf(path: &Path) -> Result<urdf_rs::Robot> {
     }
 }
 
+/// The first `<link>` or `<joint>` whose name an earlier one of its kind has, placed on both
+/// lines: the parser keeps both, and the chain, paths, trajectories and SRDF pairs are keyed
+/// by these names.
+fn repeated_name(doc: &roxmltree::Document) -> Option<String> {
+    let line = |n: roxmltree::Node| doc.text_pos_at(n.range().start).row;
+    let mut seen: HashMap<(&str, &str), roxmltree::Node> = HashMap::new();
+    for node in doc.descendants().filter(|n| n.is_element()) {
+        let kind = node.tag_name().name();
+        if !matches!(kind, "link" | "joint") || schema_of(node).is_none() {
+            continue;
+        }
+        let Some(name) = node.attribute("name") else {
+            continue;
+        };
+        if let Some(first) = seen.insert((kind, name), node) {
+            return Some(format!(
+                "lines {} and {}: two <{kind}> elements are named '{}'; {kind} names must be unique",
+                line(first),
+                line(node),
+                crate::error::shorten(name)
+            ));
+        }
+    }
+    None
+}
+
 /// The first number attribute ([`NUMERIC`]) of an element the parser reads whose value is not
 /// finite (the parser takes `nan`, `inf` and `1e400`), placed on its line.
-fn non_finite(text: &str) -> Option<String> {
-    let doc = roxmltree::Document::parse(text).ok()?;
+fn non_finite(doc: &roxmltree::Document) -> Option<String> {
     for node in doc.descendants().filter(|n| n.is_element()) {
         let tag = node.tag_name().name();
         for &(element, attr, _) in &NUMERIC {
