@@ -1368,3 +1368,32 @@ fn urdf_names_given_twice_are_refused() {
     let (code, stderr) = run(&reach_urdf(&cell, &p));
     assert_eq!(code, Some(0), "{stderr}");
 }
+
+/// A revolute or prismatic joint without `<limit>` is named as such, not with a range the file
+/// does not hold.
+#[test]
+fn urdf_joint_without_limit_is_named() {
+    let cell = repo("examples/scenarios/ur5-cell.toml");
+    let dir = tempfile::tempdir().unwrap();
+    let good = three_joint_urdf("<cylinder radius=\"0.03\" length=\"0.1\"/>", "");
+    let limit = "<limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/>";
+    for (kind, text) in [
+        ("revolute", good.replacen(limit, "", 1)),
+        (
+            "prismatic",
+            good.replacen(limit, "", 1)
+                .replacen("type=\"revolute\"", "type=\"prismatic\"", 1),
+        ),
+    ] {
+        let p = write(dir.path(), "nolimit.urdf", &text);
+        let e = rejected(
+            &reach_urdf(&cell, &p),
+            &[
+                "nolimit.urdf",
+                "line 7: joint 'j1'",
+                &format!("is {kind} but has no <limit> element"),
+            ],
+        );
+        assert!(!e.contains("lower=\"0\""), "{e}");
+    }
+}

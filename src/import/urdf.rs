@@ -7,9 +7,9 @@
 //!   below the base; a link with two child joints on the way is an error). The chain's base pose
 //!   `F_0` is the base frame's pose in the root (joints above the base taken at zero), moved on
 //!   through the leading fixed joints whose child link has no `<collision>`.
-//! - Supported joints: `revolute`, `prismatic` (limits from `<limit>`, which must be finite with
-//!   `lower < upper`), `continuous` (range `[−π, π]`) and `fixed`. `floating`, `planar`,
-//!   `spherical` and `mimic` joints are errors. Link names and joint names are unique.
+//! - Supported joints: `revolute`, `prismatic` (limits from `<limit>`, which must be present,
+//!   finite and with `lower < upper`), `continuous` (range `[−π, π]`) and `fixed`. `floating`,
+//!   `planar`, `spherical` and `mimic` joints are errors. Link names and joint names are unique.
 //! - Each moving joint is a link of the chain: a fixed transform (the fixed joints since the
 //!   previous moving joint, folded together, then the joint's origin) and one free axis. An axis
 //!   along +x, +y or +z maps to that axis (`Rx`…`Tz`); any other axis is turned onto local z by
@@ -120,9 +120,11 @@ pub fn read_urdf(path: &Path) -> Result<urdf_rs::Robot> {
             locate_fault(&text, &e.to_string()).unwrap_or_else(|| e.to_string())
         ),
     })?;
-    let fault = roxmltree::Document::parse(&text)
-        .ok()
-        .and_then(|doc| non_finite(&doc).or_else(|| repeated_name(&doc)));
+    let fault = roxmltree::Document::parse(&text).ok().and_then(|doc| {
+        non_finite(&doc)
+            .or_else(|| repeated_name(&doc))
+            .or_else(|| missing_limit(&doc))
+    });
     match fault {
         Some(fault) => Err(Error::Parse {
             file: path.to_path_buf(),
@@ -152,6 +154,31 @@ fn repeated_name(doc: &roxmltree::Document) -> Option<String> {
                 line(first),
                 line(node),
                 crate::error::shorten(name)
+            ));
+        }
+    }
+    None
+}
+
+/// The first revolute or prismatic `<joint>` without a `<limit>` element, placed on its line.
+/// The URDF format requires one; the parser would give such a joint the range `[0, 0]`.
+fn missing_limit(doc: &roxmltree::Document) -> Option<String> {
+    for node in doc.descendants().filter(|n| n.is_element()) {
+        if node.tag_name().name() != "joint" || schema_of(node).is_none() {
+            continue;
+        }
+        let Some(kind @ ("revolute" | "prismatic")) = node.attribute("type") else {
+            continue;
+        };
+        let has_limit = node
+            .children()
+            .any(|c| c.is_element() && c.tag_name().name() == "limit");
+        if !has_limit {
+            return Some(format!(
+                "line {}: joint '{}' is {kind} but has no <limit> element; a {kind} joint needs \
+                 one, with lower < upper",
+                doc.text_pos_at(node.range().start).row,
+                crate::error::shorten(node.attribute("name").unwrap_or(""))
             ));
         }
     }
