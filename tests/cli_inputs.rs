@@ -1397,3 +1397,45 @@ fn urdf_joint_without_limit_is_named() {
         assert!(!e.contains("lower=\"0\""), "{e}");
     }
 }
+
+/// URDF collision meshes obey the scenario meshes' limit: scaled vertices within 1,000 m of the
+/// mesh origin.
+#[test]
+fn urdf_mesh_scaled_beyond_the_length_limit_is_refused() {
+    let cell = repo("examples/scenarios/ur5-cell.toml");
+    let dir = tempfile::tempdir().unwrap();
+    let vessel = repo("meshes/vessel.stl");
+    let mesh = |scale: &str| {
+        format!(
+            "<mesh filename=\"{}\" scale=\"{scale}\"/>",
+            vessel.display()
+        )
+    };
+    for scale in ["1e6 1e6 1e6", "1 1e4 1"] {
+        let p = write(dir.path(), "huge.urdf", &three_joint_urdf(&mesh(scale), ""));
+        rejected(
+            &reach_urdf(&cell, &p),
+            &[
+                "huge.urdf",
+                "link 'base_link'",
+                "vessel.stl",
+                "more than 1000 m from the mesh origin",
+            ],
+        );
+    }
+    // The same mesh at a tenth of its size is read.
+    let p = write(
+        dir.path(),
+        "fine.urdf",
+        &three_joint_urdf(&mesh("0.1 0.1 0.1"), ""),
+    );
+    let (code, stderr) = run(&[
+        "view".as_ref(),
+        cell.as_os_str(),
+        "--urdf".as_ref(),
+        p.as_os_str(),
+        "-o".as_ref(),
+        dir.path().join("v.html").as_os_str(),
+    ]);
+    assert_eq!(code, Some(0), "{stderr}");
+}

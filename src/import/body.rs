@@ -23,7 +23,7 @@
 
 use super::urdf::{chain_from_urdf, read_urdf, UrdfChain};
 use crate::collision::body::{DisabledPair, Reason, RobotBody, SelfCollisionConfig, Solid};
-use crate::error::{Error, Num, Result};
+use crate::error::{fmt_list, Error, Num, Result};
 use crate::export::urdf::isometry_of;
 use crate::kinematics::Chain;
 use crate::limits::{within, MAX_ANGLE, MAX_LENGTH, MAX_SETTING};
@@ -695,7 +695,8 @@ fn catch_quietly<T>(f: impl FnOnce() -> T) -> std::result::Result<T, String> {
 }
 
 /// The convex hull of the mesh file `path` (STL, OBJ or COLLADA), each vertex scaled by
-/// `scale`, with its number of vertices. The error says what is wrong with the file.
+/// `scale`, with its number of vertices. Scaled vertices must lie within [`MAX_LENGTH`] of the
+/// mesh origin, as a scenario's mesh obstacles. The error says what is wrong with the file.
 pub fn load_hull(
     path: &Path,
     scale: [f64; 3],
@@ -748,6 +749,14 @@ pub fn load_hull(
                 );
                 if !p.coords.iter().all(|x| x.is_finite()) {
                     return Err(format!("vertex {i} is not finite"));
+                }
+                // As a scene's mesh obstacle: a body kilometres across is a wrong scale.
+                if !p.coords.iter().all(|&x| within(x, MAX_LENGTH)) {
+                    return Err(format!(
+                        "vertex {i} scaled by {} is {}, more than {MAX_LENGTH} m from the mesh origin",
+                        fmt_list(&scale),
+                        fmt_list(&[p.x, p.y, p.z])
+                    ));
                 }
                 points.push([p.x, p.y, p.z]);
             }
