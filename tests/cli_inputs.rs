@@ -1441,3 +1441,46 @@ fn urdf_mesh_scaled_beyond_the_length_limit_is_refused() {
     ]);
     assert_eq!(code, Some(0), "{stderr}");
 }
+
+/// Where an output cannot go, the message says why in the user's terms (not the name of a
+/// temporary file, nor "File exists"), and a count beyond 2^53 is not quoted as false digits.
+#[test]
+fn unusable_outputs_and_huge_counts_are_said_plainly() {
+    let s = repo("examples/scenarios/paper-2d.toml");
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("no-such-folder").join("p.html");
+    let e = rejected(
+        &[
+            "view".as_ref(),
+            s.as_os_str(),
+            "-o".as_ref(),
+            missing.as_os_str(),
+        ],
+        &["p.html", "its folder does not exist"],
+    );
+    assert!(!e.contains(".kinsynth-"), "{e}");
+    let file = dir.path().join("a-file");
+    std::fs::write(&file, "x").unwrap();
+    let e = rejected(
+        &[
+            "optimize".as_ref(),
+            s.as_os_str(),
+            "--out".as_ref(),
+            file.as_os_str(),
+            "--evaluations".as_ref(),
+            "8".as_ref(),
+        ],
+        &["a-file", "exists and is not a folder"],
+    );
+    assert!(!e.contains("os error"), "{e}");
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "x");
+    rejected(
+        &[
+            "reach".as_ref(),
+            s.as_os_str(),
+            "--seeds".as_ref(),
+            "18446744073709551615".as_ref(),
+        ],
+        &["--seeds = 1.8446744073709552e19", "from 1 to 1000"],
+    );
+}

@@ -89,9 +89,11 @@ pub fn whole(
     match v {
         None => Ok(None),
         Some(x) if x.fract() == 0.0 && x >= min as f64 && x <= max as f64 => Ok(Some(x as u64)),
+        // Read as a number so that `2.5` or `-1` get this message too; one beyond 2^53 is
+        // not exact any more, and is written in exponent form rather than as false digits.
         Some(x) => Err(kinsynth::Error::invalid(
             flag,
-            x,
+            kinsynth::error::Num(x),
             format!("must be a whole number from {min} to {max}"),
         )),
     }

@@ -308,6 +308,8 @@ pub fn prepare(args: &Args) -> Result<Prepared, kinsynth::Error> {
             .flat_map(|i| kinsynth::export::trajectory::trajectory_files(&trajectories, i));
         kinsynth::io::check_dir_not_input(flag, &trajectories, paths, &inputs)?;
     }
+    // A file (or a device) where the folder should be: say so, before the lock is taken in it.
+    kinsynth::io::check_output_dir(&out)?;
     let (lock, acquired) = OutputLock::acquire(&out)?;
     if let Some(o) = &acquired.took_over {
         eprintln!(
