@@ -46,6 +46,19 @@ fn run(args: &[&OsStr]) -> (Option<i32>, String) {
     (status.code(), stderr)
 }
 
+/// `view` of the scenario `cell` with the URDF robot `urdf` succeeds (its page in `dir`).
+fn view_reads(cell: &Path, urdf: &Path, dir: &Path) {
+    let (code, stderr) = run(&[
+        "view".as_ref(),
+        cell.as_os_str(),
+        "--urdf".as_ref(),
+        urdf.as_os_str(),
+        "-o".as_ref(),
+        dir.join("v.html").as_os_str(),
+    ]);
+    assert_eq!(code, Some(0), "{stderr}");
+}
+
 /// The command must fail with exit code 1 and one line `error: …` that contains every part.
 fn rejected(args: &[&OsStr], parts: &[&str]) -> String {
     let (code, stderr) = run(args);
@@ -591,15 +604,7 @@ fn urdf_with_too_many_collision_elements_is_refused() {
     );
     // At the limit the robot is read.
     let p = write(dir.path(), "fine.urdf", &robot_with_spheres(333));
-    let (code, stderr) = run(&[
-        "view".as_ref(),
-        cell.as_os_str(),
-        "--urdf".as_ref(),
-        p.as_os_str(),
-        "-o".as_ref(),
-        dir.path().join("v.html").as_os_str(),
-    ]);
-    assert_eq!(code, Some(0), "{stderr}");
+    view_reads(&cell, &p, dir.path());
 }
 
 #[test]
@@ -1431,15 +1436,7 @@ fn urdf_mesh_scaled_beyond_the_length_limit_is_refused() {
         "fine.urdf",
         &three_joint_urdf(&mesh("0.1 0.1 0.1"), ""),
     );
-    let (code, stderr) = run(&[
-        "view".as_ref(),
-        cell.as_os_str(),
-        "--urdf".as_ref(),
-        p.as_os_str(),
-        "-o".as_ref(),
-        dir.path().join("v.html").as_os_str(),
-    ]);
-    assert_eq!(code, Some(0), "{stderr}");
+    view_reads(&cell, &p, dir.path());
 }
 
 /// Where an output cannot go, the message says why in the user's terms (not the name of a
