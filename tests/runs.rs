@@ -264,6 +264,14 @@ fn a_checkpoint_state_of_the_wrong_length_is_an_error_not_a_panic() {
             ],
         );
     }
+    // The run's options are named as the checkpoint holds them.
+    let mut m = c.clone();
+    m["options"]["checkpoint_interval"] = serde_json::json!(-1.0);
+    std::fs::write(&path, serde_json::to_string(&m).unwrap()).unwrap();
+    one_line_error(
+        &resume(&out, &[]),
+        &["checkpoint.json", "options.checkpoint_interval = -1"],
+    );
     let mut m = c.clone();
     m["history"][0]["elapsed_s"] = serde_json::json!(-3.0);
     std::fs::write(&path, serde_json::to_string(&m).unwrap()).unwrap();

@@ -54,12 +54,19 @@ impl RunOptions {
     /// Checks the budgets and counts: finite, non-negative seconds, at least one evaluation,
     /// at most [`MAX_SEEDS`] seeds. Errors name the field (`time_limit`, …) and the value.
     pub fn validate(&self) -> Result<()> {
+        self.validate_in("")
+    }
+
+    /// As [`RunOptions::validate`], the fields named under `section` (`options.`, as a
+    /// checkpoint holds them).
+    pub fn validate_in(&self, section: &str) -> Result<()> {
+        let name = |field: &str| format!("{section}{field}");
         if let Some(t) = self.time_limit {
-            check_seconds("time_limit", t)?;
+            check_seconds(&name("time_limit"), t)?;
         }
-        check_seconds("checkpoint_interval", self.checkpoint_interval)?;
+        check_seconds(&name("checkpoint_interval"), self.checkpoint_interval)?;
         if self.evaluations == Some(0) {
-            return Err(Error::invalid("evaluations", 0, "must be at least 1"));
+            return Err(Error::invalid(name("evaluations"), 0, "must be at least 1"));
         }
         for (field, n) in [
             ("recheck_seeds", self.recheck_seeds),
@@ -67,7 +74,7 @@ impl RunOptions {
         ] {
             if n > MAX_SEEDS {
                 return Err(Error::invalid(
-                    field,
+                    name(field),
                     n,
                     format!("must be at most {MAX_SEEDS}"),
                 ));
@@ -804,8 +811,10 @@ impl<'a> Runner<'a> {
                 .map_err(|e| e.in_file(&checkpoint_path))?;
             check_planner(&self.planner).map_err(|e| e.in_file(&checkpoint_path))?;
         }
+        // Resumed, the options are the checkpoint's (with the budgets given anew).
+        let section = if resume.is_some() { "options." } else { "" };
         self.options
-            .validate()
+            .validate_in(section)
             .map_err(|e| e.in_file(&checkpoint_path))?;
         let objective = Objective::new(self.scenario, self.planner.clone(), self.options.seed)
             .with_confirmation(self.options.confirm_seeds);
