@@ -68,7 +68,7 @@ pub enum MeshDefect {
         vertex_count: usize,
     },
     /// Every triangle has zero area (relative to the size of the mesh).
-    #[error("mesh is degenerate: all {triangle_count} triangles have zero area")]
+    #[error("mesh is degenerate: every triangle has zero area ({triangle_count} in all)")]
     Degenerate {
         /// Number of triangles in the mesh.
         triangle_count: usize,
@@ -144,7 +144,7 @@ pub enum MeshError {
     },
     /// Every triangle has zero area (relative to the size of the mesh).
     #[error(
-        "{}: mesh is degenerate: all {triangle_count} triangles have zero area",
+        "{}: mesh is degenerate: every triangle has zero area ({triangle_count} in all)",
         .path.display()
     )]
     Degenerate {
@@ -1582,7 +1582,7 @@ f -3 -2 -1
         assert_eq!(
             load_err(&path),
             format!(
-                "{}: mesh is degenerate: all 3 triangles have zero area",
+                "{}: mesh is degenerate: every triangle has zero area (3 in all)",
                 path.display()
             )
         );
