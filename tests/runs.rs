@@ -272,13 +272,25 @@ fn a_checkpoint_state_of_the_wrong_length_is_an_error_not_a_panic() {
         &resume(&out, &[]),
         &["checkpoint.json", "options.checkpoint_interval = -1"],
     );
-    let mut m = c.clone();
-    m["history"][0]["elapsed_s"] = serde_json::json!(-3.0);
-    std::fs::write(&path, serde_json::to_string(&m).unwrap()).unwrap();
-    one_line_error(
-        &resume(&out, &[]),
-        &["checkpoint.json", "history[0].elapsed_s = -3"],
-    );
+    // Its history, carried into the run's plots, is held to the ranges of its figures.
+    for (field, value, says) in [
+        ("elapsed_s", -3.0, "history[0].elapsed_s = -3"),
+        (
+            "best_reachability",
+            2.0,
+            "history[0].best_reachability = 2: must lie in [0, 1]",
+        ),
+        (
+            "best_cost",
+            -1.0,
+            "history[0].best_cost = -1: must be finite and not negative",
+        ),
+    ] {
+        let mut m = c.clone();
+        m["history"][0][field] = serde_json::json!(value);
+        std::fs::write(&path, serde_json::to_string(&m).unwrap()).unwrap();
+        one_line_error(&resume(&out, &[]), &["checkpoint.json", says]);
+    }
     // The optimiser's own settings in the state are held to the scenario's rules: a
     // population of 2^31 − 1 asked for 51 GB at the next generation.
     for (field, value, says) in [

@@ -515,7 +515,7 @@ pub fn merge(dirs: &[std::path::PathBuf], out: &Path) -> Result<Vec<RunRecord>> 
                         file: best.clone(),
                         message: e.to_string(),
                     })?;
-            check_summary(&summary).map_err(|e| e.in_file(&best))?;
+            summary.check_figures().map_err(|e| e.in_file(&best))?;
             if let Some(n) = spec.evaluations.filter(|&n| summary.evaluations > n) {
                 return Err(crate::Error::invalid(
                     "evaluations",
@@ -525,9 +525,8 @@ pub fn merge(dirs: &[std::path::PathBuf], out: &Path) -> Result<Vec<RunRecord>> 
                 .in_file(&best));
             }
             summary.elapsed_s = read_elapsed(&run_dir.join(super::runner::files::TIME))?;
+            // The checkpoint's history is checked as it is read.
             let history = Runner::read_checkpoint(&run_dir)?.history;
-            check_history(&history)
-                .map_err(|e| e.in_file(run_dir.join(super::runner::files::CHECKPOINT)))?;
             records.push(RunRecord {
                 workspace: w,
                 method: k,
@@ -688,86 +687,4 @@ fn read_elapsed(path: &Path) -> Result<f64> {
         )
         .in_file(path)),
     }
-}
-
-/// A reachability must lie in [0, 1].
-fn check_reachability(field: &str, r: f64) -> Result<()> {
-    if (0.0..=1.0).contains(&r) {
-        Ok(())
-    } else {
-        Err(crate::Error::invalid(
-            field,
-            crate::error::Num(r),
-            "must lie in [0, 1]",
-        ))
-    }
-}
-
-/// A cost (paper Eq. 23, whose weights are not negative) must be finite and not negative.
-fn check_cost(field: &str, c: f64) -> Result<()> {
-    if c.is_finite() && c >= 0.0 {
-        Ok(())
-    } else {
-        Err(crate::Error::invalid(
-            field,
-            crate::error::Num(c),
-            "must be finite and not negative",
-        ))
-    }
-}
-
-/// Links and joints kept must be counts a design can have: at most its `links` links, each with
-/// six axes, within [`crate::limits::MAX_LINKS`].
-fn check_kept(field: &str, n: usize, links: usize) -> Result<()> {
-    let max = links.min(crate::limits::MAX_LINKS) * if field.contains("joint") { 6 } else { 1 };
-    if n <= max {
-        Ok(())
-    } else {
-        Err(crate::Error::invalid(
-            field,
-            n,
-            format!("must be at most {max} ({links} links)"),
-        ))
-    }
-}
-
-/// Checks the figures of a run's `best.json` that `merge` tabulates: its design, `R` in
-/// [0, 1], a finite cost ≥ 0 and links and joints kept that the design can have.
-fn check_summary(s: &RunSummary) -> Result<()> {
-    s.design.validate().map_err(|e| match e {
-        crate::Error::InvalidValue {
-            field,
-            value,
-            reason,
-        } => crate::Error::invalid(format!("design.{field}"), value, reason),
-        e => e,
-    })?;
-    check_reachability("reachability", s.reachability)?;
-    check_cost("cost", s.cost)?;
-    let links = s.design.links.len();
-    check_kept("links_kept", s.links_kept, links)?;
-    check_kept("joints_kept", s.joints_kept, links)?;
-    Ok(())
-}
-
-/// Checks the rows of a run's history that `merge` averages: seconds from 0 to
-/// [`crate::limits::MAX_SECONDS`], `R` in [0, 1], a finite cost ≥ 0 and counts within
-/// [`crate::limits::MAX_LINKS`] links.
-fn check_history(history: &[HistoryRow]) -> Result<()> {
-    use crate::limits::{MAX_LINKS, MAX_SECONDS};
-    for (i, row) in history.iter().enumerate() {
-        let field = |f: &str| format!("history[{i}].{f}");
-        if !(0.0..=MAX_SECONDS).contains(&row.elapsed_s) {
-            return Err(crate::Error::invalid(
-                field("elapsed_s"),
-                crate::error::Num(row.elapsed_s),
-                format!("must be a number of seconds from 0 to {MAX_SECONDS}"),
-            ));
-        }
-        check_reachability(&field("best_reachability"), row.best_reachability)?;
-        check_cost(&field("best_cost"), row.best_cost)?;
-        check_kept(&field("best_links"), row.best_links, MAX_LINKS)?;
-        check_kept(&field("best_joints"), row.best_joints, MAX_LINKS)?;
-    }
-    Ok(())
 }

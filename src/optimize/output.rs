@@ -148,3 +148,94 @@ pub mod files {
     /// Folder of the joint trajectories of the best design, one pair of files per reached task.
     pub const TRAJECTORIES: &str = "trajectories";
 }
+
+/// A reachability must lie in [0, 1].
+fn check_reachability(field: &str, r: f64) -> crate::Result<()> {
+    if (0.0..=1.0).contains(&r) {
+        Ok(())
+    } else {
+        Err(crate::Error::invalid(
+            field,
+            crate::error::Num(r),
+            "must lie in [0, 1]",
+        ))
+    }
+}
+
+/// A cost (paper Eq. 23, whose weights are not negative) must be finite and not negative.
+fn check_cost(field: &str, c: f64) -> crate::Result<()> {
+    if c.is_finite() && c >= 0.0 {
+        Ok(())
+    } else {
+        Err(crate::Error::invalid(
+            field,
+            crate::error::Num(c),
+            "must be finite and not negative",
+        ))
+    }
+}
+
+/// A count of links or joints kept must be at most `max` (`what`: why).
+fn check_kept(field: &str, n: usize, max: usize, what: &str) -> crate::Result<()> {
+    if n <= max {
+        Ok(())
+    } else {
+        Err(crate::Error::invalid(
+            field,
+            n,
+            format!("must be at most {max} ({what})"),
+        ))
+    }
+}
+
+/// Checks a run's history as a checkpoint holds it: per row, seconds from 0 to
+/// [`crate::limits::MAX_SECONDS`], `R` in [0, 1], a finite cost ≥ 0 and counts a design of
+/// at most [`crate::limits::MAX_LINKS`] links can have. Errors name the row's field
+/// (`history[3].best_cost`) and the value.
+pub fn check_history(history: &[HistoryRow]) -> crate::Result<()> {
+    use crate::limits::{MAX_LINKS, MAX_SECONDS};
+    for (i, row) in history.iter().enumerate() {
+        let field = |f: &str| format!("history[{i}].{f}");
+        if !(0.0..=MAX_SECONDS).contains(&row.elapsed_s) {
+            return Err(crate::Error::invalid(
+                field("elapsed_s"),
+                crate::error::Num(row.elapsed_s),
+                format!("must be a number of seconds from 0 to {MAX_SECONDS}"),
+            ));
+        }
+        check_reachability(&field("best_reachability"), row.best_reachability)?;
+        check_cost(&field("best_cost"), row.best_cost)?;
+        let limit = format!("{MAX_LINKS} links");
+        check_kept(&field("best_links"), row.best_links, MAX_LINKS, &limit)?;
+        check_kept(
+            &field("best_joints"),
+            row.best_joints,
+            6 * MAX_LINKS,
+            &limit,
+        )?;
+    }
+    Ok(())
+}
+
+impl RunSummary {
+    /// Checks the figures of a `best.json`: its design, `R` in [0, 1], a finite cost ≥ 0, and
+    /// links and joints kept that the design can have (six axes a link). Errors name the
+    /// field (`design.links[2].a`, `cost`) and the value.
+    pub fn check_figures(&self) -> crate::Result<()> {
+        self.design.validate().map_err(|e| match e {
+            crate::Error::InvalidValue {
+                field,
+                value,
+                reason,
+            } => crate::Error::invalid(format!("design.{field}"), value, reason),
+            e => e,
+        })?;
+        check_reachability("reachability", self.reachability)?;
+        check_cost("cost", self.cost)?;
+        let links = self.design.links.len();
+        let what = format!("{links} links");
+        check_kept("links_kept", self.links_kept, links, &what)?;
+        check_kept("joints_kept", self.joints_kept, 6 * links, &what)?;
+        Ok(())
+    }
+}

@@ -604,10 +604,8 @@ impl<'a> Runner<'a> {
         // The time limit of a resumed run counts from the seconds already spent: a negative
         // or non-finite count would never (or at once) reach it.
         check_seconds("elapsed_s", c.elapsed_s).map_err(|e| e.in_file(&path))?;
-        for (i, row) in c.history.iter().enumerate() {
-            check_seconds(&format!("history[{i}].elapsed_s"), row.elapsed_s)
-                .map_err(|e| e.in_file(&path))?;
-        }
+        // The history is carried into the run's plots and averaged by `merge`.
+        super::output::check_history(&c.history).map_err(|e| e.in_file(&path))?;
         Ok(c)
     }
 
