@@ -264,10 +264,9 @@ pub const MAX_COORDINATE: f64 = 1e6;
 /// `l_max` positive and at most [`crate::limits::MAX_SETTING`], errors finite and not negative
 /// (angles at most π), end effectors and tree nodes within ±[`MAX_COORDINATE`] m, tool
 /// rotations with entries in [−1, 1].
-fn check_figures(report: &ReachReport) -> std::result::Result<(), (String, String, String)> {
-    use crate::error::{fmt_list, Num};
+fn check_figures(report: &ReachReport) -> Result<()> {
+    use crate::error::{fmt_list, Error, Num};
     use std::f64::consts::PI;
-    let bad = |field: String, value: String, why: &str| Err((field, value, why.to_string()));
     let n = report.targets.len();
     let share = if n == 0 {
         0.0
@@ -275,24 +274,24 @@ fn check_figures(report: &ReachReport) -> std::result::Result<(), (String, Strin
         report.reached() as f64 / n as f64
     };
     if !(0.0..=1.0).contains(&report.reachability) {
-        return bad(
-            "reachability".into(),
-            Num(report.reachability).to_string(),
+        return Err(Error::invalid(
+            "reachability",
+            Num(report.reachability),
             "must lie in [0, 1]",
-        );
+        ));
     }
     if (report.reachability - share).abs() > 1e-9 {
-        return Err((
-            "reachability".into(),
-            Num(report.reachability).to_string(),
+        return Err(Error::invalid(
+            "reachability",
+            Num(report.reachability),
             format!("{} of its {n} targets are reached", report.reached()),
         ));
     }
     let max_setting = crate::limits::MAX_SETTING;
     if !(report.l_max > 0.0 && crate::limits::within(report.l_max, max_setting)) {
-        return Err((
-            "l_max".into(),
-            Num(report.l_max).to_string(),
+        return Err(Error::invalid(
+            "l_max",
+            Num(report.l_max),
             format!("must be positive and at most {max_setting}"),
         ));
     }
@@ -301,7 +300,11 @@ fn check_figures(report: &ReachReport) -> std::result::Result<(), (String, Strin
     for (i, t) in report.targets.iter().enumerate() {
         let field = |f: &str| format!("targets[{i}].{f}");
         if !point(&t.end_effector) {
-            return Err((field("end_effector"), fmt_list(&t.end_effector), within_m));
+            return Err(Error::invalid(
+                field("end_effector"),
+                fmt_list(&t.end_effector),
+                within_m,
+            ));
         }
         for (name, v, max) in [
             ("error", Some(t.error), 2.0 * MAX_COORDINATE),
@@ -315,9 +318,9 @@ fn check_figures(report: &ReachReport) -> std::result::Result<(), (String, Strin
             ("orientation_tolerance", t.orientation_tolerance, PI + 1e-9),
         ] {
             if let Some(v) = v.filter(|v| !(0.0..=max).contains(v)) {
-                return Err((
+                return Err(Error::invalid(
                     field(name),
-                    Num(v).to_string(),
+                    Num(v),
                     format!("must be finite, not negative and at most {}", Num(max)),
                 ));
             }
@@ -329,17 +332,17 @@ fn check_figures(report: &ReachReport) -> std::result::Result<(), (String, Strin
                 .all(|v| (-1.0 - 1e-9..=1.0 + 1e-9).contains(v))
             {
                 let flat: Vec<f64> = r.iter().flatten().copied().collect();
-                return bad(
+                return Err(Error::invalid(
                     field("tool_rotation"),
                     fmt_list(&flat),
                     "must be a rotation matrix (every entry in [-1, 1])",
-                );
+                ));
             }
         }
     }
     if let Some(tree) = &report.tree {
         if let Some(j) = tree.end_effectors.iter().position(|e| !point(e)) {
-            return Err((
+            return Err(Error::invalid(
                 format!("tree.end_effectors[{j}]"),
                 fmt_list(&tree.end_effectors[j]),
                 within_m,
@@ -378,7 +381,7 @@ pub fn load_reach(path: &Path, tasks: &[nalgebra::Point3<f64>], dof: usize) -> R
             format!("the scenario has {} tasks", tasks.len()),
         ));
     }
-    check_figures(&report).map_err(|(field, value, why)| bad(field, value, why))?;
+    check_figures(&report).map_err(|e| e.in_file(path))?;
     let mut total = 0usize;
     for (i, t) in report.targets.iter().enumerate() {
         if t.index != i {
