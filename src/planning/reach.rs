@@ -139,9 +139,15 @@ fn home_collision(scene: &CollisionScene, chain: &Chain, body: &RobotBody) -> St
     // (distance, body, obstacle) of the deepest contact, and the bodies within the clearance.
     let mut deepest: Option<(f64, usize, usize)> = None;
     let mut bodies = 0;
+    let mut near = Vec::new();
     for b in 0..body.len() {
         let mut hit = false;
-        for k in 0..scene.obstacles().len() {
+        // Only the obstacles near the body's bounding ball can be within its clearance (the
+        // scene's broad phase), in index order.
+        let (center, radius) = body.ball(&frames, &placed, b);
+        scene.near(&center, radius, scene.clearance() + 1e-9, &mut near);
+        near.sort_unstable();
+        for k in near.iter().map(|&k| k as usize) {
             if body.obstacle_distance(scene, &frames, &placed, b, k) > scene.clearance() {
                 continue;
             }
