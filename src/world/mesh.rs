@@ -1069,10 +1069,14 @@ fn parse_obj(path: &Path, bytes: &[u8]) -> Result<MeshData, MeshError> {
             |_| Ok(Default::default()),
         )
         .map_err(|e| {
-            parse_error(match e {
-                // Reading from memory only fails on bad UTF-8.
+            // Reading from memory only fails on bad UTF-8.
+            let what = match e {
                 tobj::LoadError::ReadError => "the file is not valid UTF-8 text".to_string(),
                 other => other.to_string(),
+            };
+            parse_error(match obj_error_line(bytes, e) {
+                Some((line, text)) => format!("line {line}: {what}: `{text}`"),
+                None => what,
             })
         })?;
 
@@ -1100,7 +1104,150 @@ fn parse_obj(path: &Path, bytes: &[u8]) -> Result<MeshData, MeshError> {
             mesh.triangles.push([a, b, c]);
         }
     }
+    // A coordinate tobj read as NaN or infinite ("nan", "inf", 1e400) is named by its line,
+    // which an OBJ author can find (the merged mesh numbers its vertices differently).
+    if mesh.vertices.iter().flatten().any(|x| !x.is_finite()) {
+        if let Some((line, text)) = obj_non_finite_line(bytes) {
+            return Err(parse_error(format!(
+                "line {line}: a vertex coordinate is not finite: `{text}`"
+            )));
+        }
+    }
     Ok(mesh)
+}
+
+/// The first `v` line of the OBJ `bytes` whose position (divided by its `w`, as tobj reads
+/// it) is not finite, with its text as [`quote`] gives it.
+fn obj_non_finite_line(bytes: &[u8]) -> Option<(usize, String)> {
+    bytes
+        .split(|&b| b == b'\n')
+        .enumerate()
+        .find_map(|(number, raw)| {
+            let line = std::str::from_utf8(raw).ok()?;
+            let mut words = line.split_whitespace();
+            if words.next() != Some("v") {
+                return None;
+            }
+            let values: Vec<f64> = words.map_while(|w| w.parse().ok()).collect();
+            let w = if values.len() == 4 { values[3] } else { 1.0 };
+            let bad = values.iter().take(3).any(|x| !(x / w).is_finite());
+            bad.then(|| (number + 1, quote(line)))
+        })
+}
+
+/// Longest excerpt of an offending line quoted in an error message (in characters).
+const QUOTED_LINE: usize = 60;
+
+/// The line (from 1) of the OBJ `bytes` that makes tobj fail with `error`, and its text
+/// (trimmed, cut to [`QUOTED_LINE`] characters): the first line that breaks the rule behind
+/// that error, checked as tobj checks it. `None` when the error is not about one line (or no
+/// line breaks the rule).
+fn obj_error_line(bytes: &[u8], error: tobj::LoadError) -> Option<(usize, String)> {
+    use tobj::LoadError as E;
+    let floats = |words: &[&str], n: usize| {
+        words.len() >= n && words[..n].iter().all(|w| w.parse::<f64>().is_ok())
+    };
+    // Totals for face indices, which tobj resolves once the whole object is read.
+    let (mut total_v, mut total_vt, mut total_vn) = (0usize, 0usize, 0usize);
+    if error == E::FaceVertexOutOfBounds
+        || error == E::FaceTexCoordOutOfBounds
+        || error == E::FaceNormalOutOfBounds
+    {
+        for line in bytes.split(|&b| b == b'\n') {
+            let line = String::from_utf8_lossy(line);
+            match line.split_whitespace().next() {
+                Some("v") => total_v += 1,
+                Some("vt") => total_vt += 1,
+                Some("vn") => total_vn += 1,
+                _ => {}
+            }
+        }
+    }
+    let (mut v, mut vt, mut vn) = (0isize, 0isize, 0isize);
+    for (number, raw) in bytes.split(|&b| b == b'\n').enumerate() {
+        let Ok(line) = std::str::from_utf8(raw) else {
+            return (error == E::ReadError)
+                .then(|| (number + 1, quote(&String::from_utf8_lossy(raw))));
+        };
+        let mut words = line.split_whitespace();
+        let key = words.next();
+        let words: Vec<&str> = words.collect();
+        let bad = match key {
+            Some("v") => {
+                let rest = words.get(3..).unwrap_or(&[]);
+                let fails = match error {
+                    E::PositionParseError => {
+                        !floats(&words, 3) || (rest.len() == 1 && rest[0].parse::<f64>().is_err())
+                    }
+                    E::ScalingByZeroError => {
+                        rest.len() == 1 && rest[0].parse::<f64>().is_ok_and(|w| w == 0.0)
+                    }
+                    E::ColorParseError => rest.len() == 2 || rest.len() > 3,
+                    _ => false,
+                };
+                v += 1;
+                fails
+            }
+            Some("vt") => {
+                vt += 1;
+                error == E::TexcoordParseError && !floats(&words, 2)
+            }
+            Some("vn") => {
+                vn += 1;
+                error == E::NormalParseError && !floats(&words, 3)
+            }
+            Some("f") | Some("l") => words.iter().any(|corner| {
+                let parts: Vec<&str> = corner.split('/').collect();
+                if error == E::FaceParseError {
+                    return parts.len() > 3
+                        || parts
+                            .iter()
+                            .any(|p| !p.is_empty() && p.parse::<isize>().is_err());
+                }
+                // Index `k` of a corner against the count seen so far (negative, relative)
+                // or in the whole file (positive, from 1).
+                let out = |k: usize, seen: isize, total: usize| {
+                    parts
+                        .get(k)
+                        .and_then(|p| p.parse::<isize>().ok())
+                        .is_some_and(|i| {
+                            if i < 0 {
+                                seen + i < 0
+                            } else {
+                                i == 0 || i as usize > total
+                            }
+                        })
+                };
+                match error {
+                    E::FaceVertexOutOfBounds => out(0, v, total_v),
+                    E::FaceTexCoordOutOfBounds => total_vt > 0 && out(1, vt, total_vt),
+                    E::FaceNormalOutOfBounds => total_vn > 0 && out(2, vn, total_vn),
+                    _ => false,
+                }
+            }),
+            Some("usemtl") => {
+                error == E::MaterialParseError
+                    && line
+                        .split_once(' ')
+                        .is_none_or(|(_, name)| name.trim().is_empty())
+            }
+            _ => false,
+        };
+        if bad {
+            return Some((number + 1, quote(line)));
+        }
+    }
+    None
+}
+
+/// `line` trimmed and cut to [`QUOTED_LINE`] characters (with `…` when cut), for an error
+/// message.
+fn quote(line: &str) -> String {
+    let line = line.trim();
+    match line.char_indices().nth(QUOTED_LINE) {
+        Some((cut, _)) => format!("{}…", &line[..cut]),
+        None => line.to_string(),
+    }
 }
 
 /// Widens a tobj coordinate to `f64` (tobj parses `f64` with its `use_f64`
@@ -1505,13 +1652,64 @@ f -3 -2 -1
         );
         let message = load_err(&path);
         assert!(
-            message.contains("cannot parse as OBJ: face vertex index out of bounds"),
+            message.contains(
+                "cannot parse as OBJ: line 4: face vertex index out of bounds: `f 1 2 9`"
+            ),
             "{message}"
         );
 
         let path = write(&dir, "binary.obj", b"v 0 0 0\n\xff\xfe\n");
         let message = load_err(&path);
         assert!(message.contains("not valid UTF-8"), "{message}");
+    }
+
+    /// A file tobj refuses is named with the line that breaks its rule, quoted; so is a
+    /// coordinate tobj reads as not finite.
+    #[test]
+    fn obj_errors_name_the_line() {
+        let dir = tempfile::tempdir().unwrap();
+        let good = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\n";
+        let cases: [(&str, &str); 12] = [
+            ("v 1 2 x", "line 6: position parse error: `v 1 2 x`"),
+            ("v 1 2", "line 6: position parse error: `v 1 2`"),
+            ("v 1 2 3 0", "line 6: scaling (w) by zero: `v 1 2 3 0`"),
+            ("v 1 2 3 4 5", "line 6: color parse error"),
+            ("vt 0", "line 6: texcoord parse error: `vt 0`"),
+            ("vn 0 1", "line 6: normal parse error: `vn 0 1`"),
+            ("f 1 2 3/x", "line 6: face parse error: `f 1 2 3/x`"),
+            (
+                "f 1 2 0",
+                "line 6: face vertex index out of bounds: `f 1 2 0`",
+            ),
+            (
+                "f 1 2 9",
+                "line 6: face vertex index out of bounds: `f 1 2 9`",
+            ),
+            (
+                "f -1 -2 -4",
+                "line 6: face vertex index out of bounds: `f -1 -2 -4`",
+            ),
+            (
+                "f 1/1 2/2 3/1",
+                "line 6: face texcoord index out of bounds: `f 1/1 2/2 3/1`",
+            ),
+            (
+                "v 1 nan 0\nf 1 2 4",
+                "line 6: a vertex coordinate is not finite: `v 1 nan 0`",
+            ),
+        ];
+        for (bad, expected) in cases {
+            let text = format!("{good}{bad}\nf 1 2 3\n");
+            let path = write(&dir, "bad.obj", text.as_bytes());
+            let message = load_err(&path);
+            assert!(message.contains(expected), "{bad:?}: {message}");
+        }
+        // A long line is cut.
+        let long = format!("{good}f 1 2 {}\n", "9".repeat(200));
+        let message = load_err(&write(&dir, "long.obj", long.as_bytes()));
+        assert!(message.contains("line 6: face"), "{message}");
+        assert!(message.ends_with("…`"), "{message}");
+        assert!(message.len() < 250, "{message}");
     }
 
     #[test]
@@ -1547,7 +1745,10 @@ f -3 -2 -1
         let path = write(&dir, "inf.obj", b"v 0 0 0\nv 1 inf 0\nv 0 1 0\nf 1 2 3\n");
         assert_eq!(
             load_err(&path),
-            format!("{}: vertex 1 is not finite: [1, inf, 0]", path.display())
+            format!(
+                "{}: cannot parse as OBJ: line 2: a vertex coordinate is not finite: `v 1 inf 0`",
+                path.display()
+            )
         );
     }
 
