@@ -426,7 +426,8 @@ fn mesh_errors_name_the_urdf_the_link_and_the_file() {
     let err = reach_err(&["--urdf", none.to_str().unwrap(), "--package", &meshes]);
     check(&err, &none, &["link 'link5'", "none.stl", "no triangles"]);
 
-    // Points on a line have no hull; a flat mesh is a two-sided plate and is read.
+    // Triangles of zero area are refused, as in a scenario; a flat mesh is a two-sided plate
+    // and is read.
     std::fs::write(
         d.join("line.obj"),
         b"v 0 0 0\nv 0.1 0 0\nv 0.2 0 0\nf 1 2 3\n",
@@ -437,7 +438,11 @@ fn mesh_errors_name_the_urdf_the_link_and_the_file() {
     check(
         &err,
         &line,
-        &["link 'link5'", "line.obj", "points lie on a line"],
+        &[
+            "link 'link5'",
+            "line.obj",
+            "mesh is degenerate: every triangle has zero area",
+        ],
     );
     let plate = b"v 0 0 0\nv 0.04 0 0\nv 0.04 0.04 0\nv 0 0.04 0\nf 1 2 3\nf 1 3 4\n";
     std::fs::write(d.join("plate.obj"), plate).unwrap();
@@ -488,6 +493,96 @@ fn mesh_errors_name_the_urdf_the_link_and_the_file() {
         "nodir",
     ]);
     assert!(!ok && err.contains("NAME=DIR"), "{err}");
+}
+
+/// An OBJ of four vertices and one polygon fanned into `triangles` triangles (a small file
+/// that builds a large mesh).
+fn fan_obj(path: &Path, triangles: usize) {
+    let corners = ["1", "2", "3", "4"];
+    let face: Vec<&str> = (0..triangles + 2).map(|i| corners[i % 4]).collect();
+    let text = format!(
+        "v 0 0 0\nv 0.1 0 0\nv 0.1 0.1 0\nv 0 0.1 0.1\nf {}\n",
+        face.join(" ")
+    );
+    std::fs::write(path, text).unwrap();
+}
+
+/// A URDF's STL and OBJ collision meshes are read as a scenario's: a binary STL's count is
+/// checked, an OBJ's material library is never opened, a file holds at most
+/// `MAX_MESH_TRIANGLES` triangles and all the hulls built (each file at each scale) as many.
+#[test]
+fn urdf_meshes_are_read_with_the_scenario_limits() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let with = |name: &str, mesh: &str| variant(d, name, "../../meshes/arm/link5.dae", mesh);
+    // A material library that cannot be read as one: never opened, the mesh is read.
+    std::fs::write(d.join("bad.mtl"), "newmtl\nKd x y z\n").unwrap();
+    std::fs::write(
+        d.join("tet.obj"),
+        "mtllib bad.mtl\nv 0 0 0\nv 0.05 0 0\nv 0 0.05 0\nv 0 0 0.05\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n",
+    )
+    .unwrap();
+    let tet = with("tet.urdf", "tet.obj");
+    let (ok, _, err) = kinsynth(&[
+        "reach",
+        "examples/scenarios/ur5-cell.toml",
+        "--urdf",
+        tet.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+
+    // A binary STL whose header declares fewer triangles than it holds.
+    let mut stl = vec![0u8; 80];
+    stl.extend_from_slice(&1u32.to_le_bytes());
+    for t in 0..2 {
+        stl.extend_from_slice(&[0u8; 12]);
+        for v in [
+            [0.0f32, 0.0, 0.0],
+            [0.05, 0.0, t as f32 * 0.05],
+            [0.0, 0.05, 0.0],
+        ] {
+            for x in v {
+                stl.extend_from_slice(&x.to_le_bytes());
+            }
+        }
+        stl.extend_from_slice(&[0u8; 2]);
+    }
+    std::fs::write(d.join("count.stl"), stl).unwrap();
+    let count = with("count.urdf", "count.stl");
+    let err = reach_err(&["--urdf", count.to_str().unwrap()]);
+    assert!(
+        err.contains("count.stl") && err.contains("the count is wrong"),
+        "{err}"
+    );
+
+    // One file beyond the limit: refused before its triangles are built.
+    let limit = kinsynth::limits::MAX_MESH_TRIANGLES;
+    fan_obj(&d.join("huge.obj"), limit + 1);
+    let huge = with("huge.urdf", "huge.obj");
+    let err = reach_err(&["--urdf", huge.to_str().unwrap()]);
+    assert!(
+        err.contains("huge.obj") && err.contains(&format!("more than the limit of {limit}")),
+        "{err}"
+    );
+
+    // Two scales of a file of 3/5 of the limit: the second hull is refused.
+    fan_obj(&d.join("big.obj"), 3 * limit / 5);
+    let text = std::fs::read_to_string(with("big1.urdf", "big.obj")).unwrap();
+    let twice = text.replacen(
+        &format!(
+            "{}/meshes/arm/link3.dae\" scale=\"1 1 1\"",
+            root().display()
+        ),
+        &format!("{}\" scale=\"2 2 2\"", d.join("big.obj").display()),
+        1,
+    );
+    assert_ne!(twice, text);
+    std::fs::write(d.join("twice.urdf"), twice).unwrap();
+    let err = reach_err(&["--urdf", d.join("twice.urdf").to_str().unwrap()]);
+    assert!(
+        err.contains("collision meshes (each file at each scale) hold"),
+        "{err}"
+    );
 }
 
 #[test]

@@ -440,8 +440,9 @@ pub fn resolve_mesh(
 /// `<Name_array>` or `<IDREF_array>` with values there). And what the reader panics on: every
 /// `source="#id"` in a geometry names an element of the kind it expects, an accessor's stride
 /// is not 0, positions and normals are three floats per vertex within their array, and every
-/// vertex index names a position. Anything else is left to the reader.
-fn check_collada(text: &str) -> std::result::Result<(), String> {
+/// vertex index names a position. Anything else is left to the reader. Returns an upper bound
+/// of the triangles the reader will build (exact for `<triangles>` and `<polylist>`).
+fn check_collada(text: &str) -> std::result::Result<u64, String> {
     /// Largest `<input offset>` of a primitive (real files use a handful of inputs).
     const MAX_OFFSET: u64 = 1024;
     let doc = roxmltree::Document::parse(text).map_err(|e| format!("not a readable mesh: {e}"))?;
@@ -450,7 +451,7 @@ fn check_collada(text: &str) -> std::result::Result<(), String> {
         .children()
         .find(|n| n.has_tag_name("library_geometries"))
     else {
-        return Ok(());
+        return Ok(0);
     };
     let number = |n: roxmltree::Node, attr: &str| -> std::result::Result<u64, String> {
         match n.attribute(attr) {
@@ -464,6 +465,7 @@ fn check_collada(text: &str) -> std::result::Result<(), String> {
         }
     };
     let text_len = |n: roxmltree::Node| n.text().map_or(0, |t| t.trim().len()) as u64;
+    let mut triangles = 0u64;
     for n in geometries.descendants().filter(|n| n.is_element()) {
         let name = n.tag_name().name();
         if name.ends_with("_array") {
@@ -514,10 +516,14 @@ fn check_collada(text: &str) -> std::result::Result<(), String> {
                     ));
                 }
                 let values = v.text().unwrap_or("").split_ascii_whitespace();
-                values
+                let sizes = values
                     .take(count as usize)
-                    .map(|x| x.parse::<u64>().unwrap_or(0))
-                    .fold(0u64, u64::saturating_add)
+                    .map(|x| x.parse::<u64>().unwrap_or(0));
+                let (vertices, fanned) = sizes.fold((0u64, 0u64), |(v, t), k| {
+                    (v.saturating_add(k), t.saturating_add(k.saturating_sub(2)))
+                });
+                triangles = triangles.saturating_add(fanned);
+                vertices
             }
             (None, _) => count,
         };
@@ -526,6 +532,13 @@ fn check_collada(text: &str) -> std::result::Result<(), String> {
                 "<{name} count=\"{count}\">: more indices than its <p> elements hold"
             ));
         }
+        triangles = triangles.saturating_add(match name {
+            "triangles" => count,
+            "lines" | "linestrips" | "polylist" => 0, // polylist: counted above
+            // Polygons, fans and strips: at most one triangle per index (each index takes
+            // two characters of <p> at least).
+            _ => indices / 2 / stride,
+        });
     }
     // References inside the geometries resolve to the kind of element the reader expects,
     // accessors step forward, and positions and normals are three floats (the reader panics
@@ -661,7 +674,7 @@ fn check_collada(text: &str) -> std::result::Result<(), String> {
             }
         }
     }
-    Ok(())
+    Ok(triangles)
 }
 
 /// Runs `f` and returns its value, or the panic's message (shortened) if it panicked, without
@@ -694,9 +707,70 @@ fn catch_quietly<T>(f: impl FnOnce() -> T) -> std::result::Result<T, String> {
     })
 }
 
+/// The corners of every triangle of the COLLADA file `path` (vertex index, position), after
+/// [`check_collada`] and a count of its triangles against
+/// [`crate::limits::MAX_MESH_TRIANGLES`]; the reader is given no way to open another file.
+fn collada_corners(path: &Path) -> std::result::Result<Vec<(u32, [f64; 3])>, String> {
+    let bytes = crate::limits::read_file(path, crate::limits::MAX_MESH_FILE_BYTES)
+        .map_err(|e| format!("cannot read: {e}"))?;
+    if bytes.is_empty() {
+        return Err("empty file".into());
+    }
+    let text = String::from_utf8_lossy(&bytes);
+    crate::limits::check_xml_depth(&text, crate::limits::MAX_MESH_XML_DEPTH)?;
+    let triangles = check_collada(&text)?;
+    let limit = crate::limits::MAX_MESH_TRIANGLES as u64;
+    if triangles > limit {
+        return Err(format!(
+            "{triangles} triangles: more than the limit of {limit}"
+        ));
+    }
+    let refuse = |other: &Path| -> std::io::Result<Vec<u8>> {
+        Err(std::io::Error::new(
+            std::io::ErrorKind::Unsupported,
+            format!(
+                "{} is not read (a mesh is read from one file)",
+                other.display()
+            ),
+        ))
+    };
+    // The COLLADA reader panics on some malformed files (a missing source, a short array)
+    // instead of returning an error: such a panic is this file's error too.
+    let scene = catch_quietly(|| {
+        mesh_loader::Loader::default().load_from_slice_with_reader(&bytes, path, refuse)
+    })
+    .map_err(|why| {
+        let said = if why.is_empty() {
+            why
+        } else {
+            format!(" ({why})")
+        };
+        format!("not a readable mesh: the mesh reader failed on it{said}")
+    })?
+    .map_err(|e| format!("not a readable mesh: {e}"))?;
+    let mut corners = Vec::new();
+    for m in &scene.meshes {
+        for f in &m.faces {
+            for &i in f {
+                let Some(v) = m.vertices.get(i as usize) else {
+                    return Err(format!(
+                        "a triangle refers to vertex {i}, which does not exist"
+                    ));
+                };
+                corners.push((i, v.map(f64::from)));
+            }
+        }
+    }
+    Ok(corners)
+}
+
 /// The convex hull of the mesh file `path` (STL, OBJ or COLLADA), each vertex scaled by
-/// `scale`, with its number of vertices. Scaled vertices must lie within [`MAX_LENGTH`] of the
-/// mesh origin, as a scenario's mesh obstacles. The error says what is wrong with the file.
+/// `scale`, with its number of points (three per triangle). Scaled vertices must lie within
+/// [`MAX_LENGTH`] of the mesh origin, as a scenario's mesh obstacles. STL and OBJ files are read
+/// as a scenario's meshes are ([`crate::world::mesh::load_mesh`]: the same limits, checks and
+/// messages; an OBJ's material libraries are never opened); a COLLADA file is checked, its
+/// triangles counted against [`crate::limits::MAX_MESH_TRIANGLES`], and read without opening any
+/// other file. The error says what is wrong with the file.
 pub fn load_hull(
     path: &Path,
     scale: [f64; 3],
@@ -710,57 +784,41 @@ pub fn load_hull(
             "unknown file extension \"{extension}\" (expected .stl, .obj or .dae)"
         ));
     }
-    let bytes = crate::limits::read_file(path, crate::limits::MAX_MESH_FILE_BYTES)
-        .map_err(|e| format!("cannot read: {e}"))?;
-    if bytes.is_empty() {
-        return Err("empty file".into());
-    }
-    let collada = extension.eq_ignore_ascii_case("dae");
-    if collada {
-        let text = String::from_utf8_lossy(&bytes);
-        crate::limits::check_xml_depth(&text, crate::limits::MAX_MESH_XML_DEPTH)?;
-        check_collada(&text)?;
-    }
-    // The COLLADA reader panics on some malformed files (a missing source, a short array)
-    // instead of returning an error: such a panic is this file's error too.
-    let scene = catch_quietly(|| mesh_loader::Loader::default().load_from_slice(&bytes, path))
-        .map_err(|why| {
-            let said = if why.is_empty() {
-                why
-            } else {
-                format!(" ({why})")
-            };
-            format!("not a readable mesh: the mesh reader failed on it{said}")
-        })?
-        .map_err(|e| format!("not a readable mesh: {e}"))?;
-    let mut points: Vec<[f64; 3]> = Vec::new();
-    for m in &scene.meshes {
-        for f in &m.faces {
-            for &i in f {
-                let Some(v) = m.vertices.get(i as usize) else {
-                    return Err(format!(
-                        "a triangle refers to vertex {i}, which does not exist"
-                    ));
-                };
-                let p = Point3::new(
-                    f64::from(v[0]) * scale[0],
-                    f64::from(v[1]) * scale[1],
-                    f64::from(v[2]) * scale[2],
-                );
-                if !p.coords.iter().all(|x| x.is_finite()) {
-                    return Err(format!("vertex {i} is not finite"));
-                }
-                // As a scene's mesh obstacle: a body kilometres across is a wrong scale.
-                if !p.coords.iter().all(|&x| within(x, MAX_LENGTH)) {
-                    return Err(format!(
-                        "vertex {i} scaled by {} is {}, more than {MAX_LENGTH} m from the mesh origin",
-                        fmt_list(&scale),
-                        fmt_list(&[p.x, p.y, p.z])
-                    ));
-                }
-                points.push([p.x, p.y, p.z]);
-            }
+    // Each triangle's corners, unscaled (with the vertex index a message names).
+    let corners: Vec<(u32, [f64; 3])> = if extension.eq_ignore_ascii_case("dae") {
+        collada_corners(path)?
+    } else {
+        let mesh = crate::world::mesh::load_mesh(path).map_err(|e| {
+            // The caller names the file.
+            let said = e.to_string();
+            let prefix = format!("{}: ", path.display());
+            said.strip_prefix(&prefix).unwrap_or(&said).to_string()
+        })?;
+        mesh.triangles
+            .iter()
+            .flatten()
+            .map(|&i| (i, mesh.vertices[i as usize]))
+            .collect()
+    };
+    let mut points: Vec<[f64; 3]> = Vec::with_capacity(corners.len());
+    for (i, v) in corners {
+        let p = Point3::new(v[0] * scale[0], v[1] * scale[1], v[2] * scale[2]);
+        if !p.coords.iter().all(|x| x.is_finite()) {
+            return Err(format!(
+                "vertex {i} scaled by {} is not finite: {}",
+                fmt_list(&scale),
+                fmt_list(&[p.x, p.y, p.z])
+            ));
         }
+        // As a scene's mesh obstacle: a body kilometres across is a wrong scale.
+        if !p.coords.iter().all(|&x| within(x, MAX_LENGTH)) {
+            return Err(format!(
+                "vertex {i} scaled by {} is {}, more than {MAX_LENGTH} m from the mesh origin",
+                fmt_list(&scale),
+                fmt_list(&[p.x, p.y, p.z])
+            ));
+        }
+        points.push([p.x, p.y, p.z]);
     }
     if points.is_empty() {
         return Err("the mesh has no triangles".into());
@@ -963,6 +1021,8 @@ pub fn robot_body(
     // Elements naming the same file at the same scale share one hull.
     let mut hulls: std::collections::HashMap<(PathBuf, [u64; 3]), SharedShape> =
         std::collections::HashMap::new();
+    // Triangles of the hulls built so far.
+    let mut triangles = 0usize;
     for e in elements {
         let c = &urdf.carried[e.carried];
         let (local, shape) = match e.piece {
@@ -979,12 +1039,29 @@ pub fn robot_body(
                 let hull = match hulls.get(&key) {
                     Some(hull) => hull.clone(),
                     None => {
-                        let (hull, _) = load_hull(&key.0, scale).map_err(|why| {
+                        let what = || format!("mesh '{filename}' ({})", key.0.display());
+                        // All the hulls built count together, as a scenario's meshes: counted
+                        // before a file is built when its format allows, after otherwise.
+                        let limit = crate::limits::MAX_SCENE_MESH_TRIANGLES;
+                        let counted = crate::world::mesh::count_triangles(&key.0).unwrap_or(0);
+                        let over = |total: usize| {
                             link_err(
                                 &c.name,
-                                format!("mesh '{filename}' ({}): {why}", key.0.display()),
+                                format!(
+                                    "{}: the robot's collision meshes (each file at each scale) hold {total} triangles or more in all, more than the limit of {limit}",
+                                    what()
+                                ),
                             )
-                        })?;
+                        };
+                        if triangles.saturating_add(counted) > limit {
+                            return Err(over(triangles.saturating_add(counted)));
+                        }
+                        let (hull, points) = load_hull(&key.0, scale)
+                            .map_err(|why| link_err(&c.name, format!("{}: {why}", what())))?;
+                        triangles = triangles.saturating_add(counted.max(points / 3));
+                        if triangles > limit {
+                            return Err(over(triangles));
+                        }
                         hulls.insert(key, hull.clone());
                         hull
                     }
@@ -1043,6 +1120,37 @@ pub fn load_robot(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The triangles a COLLADA file will build are counted before it is read: those of
+    /// `<triangles>`, and of `<polylist>` fanned (`k − 2` per polygon of `k` vertices).
+    #[test]
+    fn collada_triangles_are_counted_before_reading() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/arm/link2.dae");
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert_eq!(check_collada(&text), Ok(28));
+        let start = text.find("<triangles").unwrap();
+        let end = text.find("</triangles>").unwrap() + "</triangles>".len();
+        // The same 28 triangles as quads and pentagons fanned: 7 polygons of 4 and 5 vertices.
+        let inputs: String = text[start..end]
+            .lines()
+            .filter(|l| l.contains("<input"))
+            .collect();
+        let indices: Vec<&str> = text[start..end]
+            .split("<p>")
+            .nth(1)
+            .unwrap()
+            .split("</p>")
+            .next()
+            .unwrap()
+            .split_whitespace()
+            .collect();
+        let polylist = format!(
+            "<polylist count=\"3\">{inputs}<vcount>4 5 6</vcount><p>{}</p></polylist>",
+            indices[..15].join(" ")
+        );
+        let edited = format!("{}{polylist}{}", &text[..start], &text[end..]);
+        assert_eq!(check_collada(&edited), Ok(2 + 3 + 4));
+    }
 
     #[test]
     fn a_caught_panic_gives_its_first_line_and_no_panic_escapes() {
