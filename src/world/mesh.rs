@@ -68,10 +68,15 @@ pub enum MeshDefect {
         vertex_count: usize,
     },
     /// Every triangle has zero area (relative to the size of the mesh).
-    #[error("mesh is degenerate: every triangle has zero area ({triangle_count} in all)")]
+    #[error(
+        "mesh is degenerate: every triangle has zero area ({triangle_count} in all){}",
+        FmtSpan(*.largest)
+    )]
     Degenerate {
         /// Number of triangles in the mesh.
         triangle_count: usize,
+        /// The largest coordinate of a vertex (its absolute value).
+        largest: f64,
     },
 }
 
@@ -144,14 +149,17 @@ pub enum MeshError {
     },
     /// Every triangle has zero area (relative to the size of the mesh).
     #[error(
-        "{}: mesh is degenerate: every triangle has zero area ({triangle_count} in all)",
-        .path.display()
+        "{}: mesh is degenerate: every triangle has zero area ({triangle_count} in all){}",
+        .path.display(),
+        FmtSpan(*.largest)
     )]
     Degenerate {
         /// The file.
         path: PathBuf,
         /// Number of triangles in the mesh.
         triangle_count: usize,
+        /// The largest coordinate of a vertex (its absolute value).
+        largest: f64,
     },
 }
 
@@ -187,9 +195,13 @@ impl MeshError {
                 vertex,
                 vertex_count,
             },
-            MeshDefect::Degenerate { triangle_count } => MeshError::Degenerate {
+            MeshDefect::Degenerate {
+                triangle_count,
+                largest,
+            } => MeshError::Degenerate {
                 path,
                 triangle_count,
+                largest,
             },
         }
     }
@@ -231,6 +243,25 @@ impl fmt::Display for FmtPoint<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let [x, y, z] = self.0;
         write!(f, "[{x}, {y}, {z}]")
+    }
+}
+
+/// After a degenerate mesh's message: when a coordinate is far beyond any cell (more than
+/// 1,000 × [`crate::limits::MAX_LENGTH`]), that coordinate, which makes every other triangle
+/// small by comparison (and is likely in a wrong unit); else nothing.
+struct FmtSpan(f64);
+
+impl fmt::Display for FmtSpan {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.0 > 1e3 * crate::limits::MAX_LENGTH {
+            write!(
+                f,
+                ", relative to a vertex coordinate of {:e}: is the unit wrong?",
+                self.0
+            )
+        } else {
+            Ok(())
+        }
     }
 }
 
@@ -384,8 +415,10 @@ impl MeshData {
             norm(cross(ab, ac)) <= tolerance
         });
         if all_zero {
+            let largest = min.iter().chain(&max).fold(0.0f64, |m, x| m.max(x.abs()));
             return Err(MeshDefect::Degenerate {
                 triangle_count: self.triangles.len(),
+                largest,
             });
         }
         Ok(())
@@ -1042,6 +1075,19 @@ fn parse_obj(path: &Path, bytes: &[u8]) -> Result<MeshData, MeshError> {
         format: "OBJ",
         message,
     };
+    // A byte order mark would hide the first line's keyword; a file with carriage returns
+    // only (classic Mac OS) ends its lines with them.
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    let converted: Vec<u8>;
+    let bytes = if bytes.contains(&b'\r') && !bytes.contains(&b'\n') {
+        converted = bytes
+            .iter()
+            .map(|&b| if b == b'\r' { b'\n' } else { b })
+            .collect();
+        &converted[..]
+    } else {
+        bytes
+    };
     // Count triangles and vertices before tobj builds them, so a small file of long polygons
     // cannot expand into gigabytes.
     let (triangles, vertices) = obj_counts(bytes);
@@ -1049,6 +1095,12 @@ fn parse_obj(path: &Path, bytes: &[u8]) -> Result<MeshData, MeshError> {
     if triangles > limit || vertices > limit {
         return Err(parse_error(format!(
             "{triangles} triangles and {vertices} vertices: more than the limit of {limit}"
+        )));
+    }
+    // tobj drops a face of one or two vertices as a point or a line: a face needs three.
+    if let Some((line, text)) = obj_short_face(bytes) {
+        return Err(parse_error(format!(
+            "line {line}: a face needs at least 3 vertices: `{text}`"
         )));
     }
     // The struct update covers fields that only exist with tobj's optional
@@ -1104,16 +1156,30 @@ fn parse_obj(path: &Path, bytes: &[u8]) -> Result<MeshData, MeshError> {
             mesh.triangles.push([a, b, c]);
         }
     }
-    // A coordinate tobj read as NaN or infinite ("nan", "inf", 1e400) is named by its line,
-    // which an OBJ author can find (the merged mesh numbers its vertices differently).
-    if mesh.vertices.iter().flatten().any(|x| !x.is_finite()) {
-        if let Some((line, text)) = obj_non_finite_line(bytes) {
-            return Err(parse_error(format!(
-                "line {line}: a vertex coordinate is not finite: `{text}`"
-            )));
-        }
+    // A coordinate tobj read as NaN or infinite ("nan", "inf", 1e400), used by a face or not,
+    // is named by its line, which an OBJ author can find (the merged mesh numbers its vertices
+    // differently).
+    if let Some((line, text)) = obj_non_finite_line(bytes) {
+        return Err(parse_error(format!(
+            "line {line}: a vertex coordinate is not finite: `{text}`"
+        )));
     }
     Ok(mesh)
+}
+
+/// The first `f` line of the OBJ `bytes` with fewer than three vertices, with its text as
+/// [`quote`] gives it.
+fn obj_short_face(bytes: &[u8]) -> Option<(usize, String)> {
+    bytes
+        .split(|&b| b == b'\n')
+        .enumerate()
+        .find_map(|(number, raw)| {
+            let mut words = raw
+                .split(|b| b.is_ascii_whitespace())
+                .filter(|w| !w.is_empty());
+            (words.next() == Some(b"f") && words.count() < 3)
+                .then(|| (number + 1, quote(&String::from_utf8_lossy(raw))))
+        })
 }
 
 /// The first `v` line of the OBJ `bytes` whose position (divided by its `w`, as tobj reads
@@ -1669,7 +1735,7 @@ f -3 -2 -1
     fn obj_errors_name_the_line() {
         let dir = tempfile::tempdir().unwrap();
         let good = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\n";
-        let cases: [(&str, &str); 12] = [
+        let cases: [(&str, &str); 15] = [
             ("v 1 2 x", "line 6: position parse error: `v 1 2 x`"),
             ("v 1 2", "line 6: position parse error: `v 1 2`"),
             ("v 1 2 3 0", "line 6: scaling (w) by zero: `v 1 2 3 0`"),
@@ -1697,6 +1763,12 @@ f -3 -2 -1
                 "v 1 nan 0\nf 1 2 4",
                 "line 6: a vertex coordinate is not finite: `v 1 nan 0`",
             ),
+            (
+                "v 1 nan 0",
+                "line 6: a vertex coordinate is not finite: `v 1 nan 0`",
+            ),
+            ("f 1 2", "line 6: a face needs at least 3 vertices: `f 1 2`"),
+            ("f", "line 6: a face needs at least 3 vertices: `f`"),
         ];
         for (bad, expected) in cases {
             let text = format!("{good}{bad}\nf 1 2 3\n");
@@ -1704,6 +1776,18 @@ f -3 -2 -1
             let message = load_err(&path);
             assert!(message.contains(expected), "{bad:?}: {message}");
         }
+        // A byte order mark, and carriage returns alone as line ends, are read.
+        let bom = format!("\u{feff}{good}f 1 2 3\n");
+        assert!(load_mesh(&write(&dir, "bom.obj", bom.as_bytes())).is_ok());
+        let classic = format!("{good}f 1 2 3\n").replace('\n', "\r");
+        let mesh = load_mesh(&write(&dir, "cr.obj", classic.as_bytes())).unwrap();
+        assert_eq!(mesh.triangles.len(), 1);
+        let bad = format!("{good}v 1 x 0\n").replace('\n', "\r");
+        let message = load_err(&write(&dir, "cr_bad.obj", bad.as_bytes()));
+        assert!(
+            message.contains("line 6: position parse error"),
+            "{message}"
+        );
         // A long line is cut.
         let long = format!("{good}f 1 2 {}\n", "9".repeat(200));
         let message = load_err(&write(&dir, "long.obj", long.as_bytes()));
@@ -1786,6 +1870,16 @@ f -3 -2 -1
                 "{}: mesh is degenerate: every triangle has zero area (3 in all)",
                 path.display()
             )
+        );
+        // A coordinate far beyond any cell makes every other triangle small: it is named.
+        let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv -1e160 0 0\nf 1 2 3\nf 1 2 4\n";
+        let path = write(&dir, "far.obj", text.as_bytes());
+        assert!(
+            load_err(&path).ends_with(
+                "every triangle has zero area (2 in all), relative to a vertex coordinate of 1e160: is the unit wrong?"
+            ),
+            "{}",
+            load_err(&path)
         );
     }
 
