@@ -16,6 +16,21 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
         path: path.to_path_buf(),
         source,
     };
+    // An existing target that is not a regular file is written into, whatever links lead to
+    // it: `/dev/stdout` is a link to `/proc/self/fd/1`, whose target (`pipe:[N]` for a pipe)
+    // names nothing a path can be resolved to, but opens.
+    if let Ok(m) = std::fs::metadata(path) {
+        if !m.is_file() && !m.is_dir() {
+            let mut f = std::fs::OpenOptions::new()
+                .write(true)
+                .open(path)
+                .map_err(write_err)?;
+            return f
+                .write_all(bytes)
+                .and_then(|()| f.flush())
+                .map_err(write_err);
+        }
+    }
     let resolved;
     let target = match std::fs::symlink_metadata(path) {
         Ok(m) if m.file_type().is_symlink() => {
@@ -29,23 +44,11 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
         }
         _ => path,
     };
-    if let Ok(m) = std::fs::metadata(target) {
-        if m.is_dir() {
-            return Err(write_err(std::io::Error::new(
-                std::io::ErrorKind::IsADirectory,
-                "is a directory",
-            )));
-        }
-        if !m.is_file() {
-            let mut f = std::fs::OpenOptions::new()
-                .write(true)
-                .open(target)
-                .map_err(write_err)?;
-            return f
-                .write_all(bytes)
-                .and_then(|()| f.flush())
-                .map_err(write_err);
-        }
+    if std::fs::metadata(target).is_ok_and(|m| m.is_dir()) {
+        return Err(write_err(std::io::Error::new(
+            std::io::ErrorKind::IsADirectory,
+            "is a directory",
+        )));
     }
     let dir = folder_of(target);
     let mut tmp = tempfile::Builder::new()

@@ -641,6 +641,88 @@ fn urdf_output_never_overwritten_by_its_own_srdf() {
     assert!(ok.is_file() && dir.path().join("ok.srdf").is_file());
 }
 
+/// An output given as `/dev/stdout` while stdout is a pipe (as in `| jq`) is written into the
+/// pipe, alone: the command's messages go to stderr. `urdf -o /dev/null` or `-o /dev/stdout`
+/// writes no SRDF beside it (`/dev/null.srdf`) unless --srdf names one. And a reader that
+/// closes the pipe early (`| head -1`) does not stop the command before it writes its files.
+#[cfg(unix)]
+#[test]
+fn outputs_into_stdout_pipes_come_through_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let piped = |args: &[&OsStr]| {
+        let out = Command::new(BIN)
+            .args(args)
+            .stdin(Stdio::null())
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert!(out.status.success(), "{args:?}: {stderr}");
+        (String::from_utf8_lossy(&out.stdout).into_owned(), stderr)
+    };
+    let cell = repo("examples/scenarios/paper-2d.toml");
+    let (json, said) = piped(&[
+        "reach".as_ref(),
+        cell.as_os_str(),
+        "--json".as_ref(),
+        "/dev/stdout".as_ref(),
+    ]);
+    let v: serde_json::Value = serde_json::from_str(&json).expect("stdout is the JSON alone");
+    assert_eq!(v["reachability"], 1.0);
+    assert!(said.contains("R = 1.000"), "{said}");
+
+    let d = write(dir.path(), "d.json", &design("0.3", "[-1, 1]", 2));
+    let (urdf, said) = piped(&[
+        "urdf".as_ref(),
+        d.as_os_str(),
+        "-o".as_ref(),
+        "/dev/stdout".as_ref(),
+    ]);
+    assert!(
+        urdf.starts_with("<?xml") && urdf.trim_end().ends_with("</robot>"),
+        "{urdf}"
+    );
+    assert!(said.contains("no SRDF"), "{said}");
+    let srdf = dir.path().join("d.srdf");
+    let (_, said) = piped(&[
+        "urdf".as_ref(),
+        d.as_os_str(),
+        "-o".as_ref(),
+        "/dev/null".as_ref(),
+        "--srdf".as_ref(),
+        srdf.as_os_str(),
+    ]);
+    assert!(srdf.is_file(), "{said}");
+    assert!(!Path::new("/dev/null.srdf").exists());
+
+    // `reach … --json FILE | head -c 1`: the reader is gone after the first line, the JSON
+    // is written all the same.
+    for attempt in 0..3 {
+        let report = dir.path().join(format!("r{attempt}.json"));
+        let mut child = Command::new(BIN)
+            .args(
+                [cell.as_os_str(), report.as_os_str()]
+                    .iter()
+                    .enumerate()
+                    .flat_map(|(i, a)| {
+                        if i == 0 {
+                            vec![OsStr::new("reach"), a]
+                        } else {
+                            vec![OsStr::new("--json"), a]
+                        }
+                    }),
+            )
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        drop(child.stdout.take()); // the reader closes at once
+        let status = child.wait().unwrap();
+        assert!(status.success());
+        assert!(report.is_file(), "attempt {attempt}: no report written");
+    }
+}
+
 /// The scenario's mesh-triangle limit counts distinct meshes: a file placed again with the same
 /// representation and scale shares its shape and adds nothing, one at another scale is another
 /// mesh. An OBJ tetrahedron whose four faces repeat 650,000 times (2.6M triangles) is placed

@@ -3,14 +3,40 @@
 
 use std::path::{Path, PathBuf};
 
-/// `println!` that ends the process quietly when stdout is closed (e.g. piped into `head`).
+/// `println!` for a command's messages. When an output file of the command is the standard
+/// output ([`output_file`], e.g. `--json /dev/stdout`), they go to stderr instead, so that
+/// the file's bytes come through alone. Once stdout is closed (its reader, such as `head`, has
+/// ended) nothing more is printed, and the command still writes its files.
 macro_rules! say {
     ($($t:tt)*) => {{
         use std::io::Write as _;
-        if writeln!(std::io::stdout(), $($t)*).is_err() {
-            std::process::exit(0);
+        use std::sync::atomic::Ordering;
+        if $crate::cli::STDOUT_TAKEN.load(Ordering::Relaxed) {
+            eprintln!($($t)*);
+        } else if !$crate::cli::STDOUT_CLOSED.load(Ordering::Relaxed)
+            && writeln!(std::io::stdout(), $($t)*).is_err()
+        {
+            $crate::cli::STDOUT_CLOSED.store(true, Ordering::Relaxed);
         }
     }};
+}
+
+/// Set when an output file of the command is the standard output (see `say!`).
+pub static STDOUT_TAKEN: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Set once a message could not be written to stdout (see `say!`).
+pub static STDOUT_CLOSED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Checks, before any work, that `path` can take an output file
+/// ([`kinsynth::io::check_output_file`]); when it is the standard output (`/dev/stdout`,
+/// `/proc/self/fd/1`, or a file stdout is redirected to), the command's messages go to stderr
+/// from now on.
+pub fn output_file(path: &Path) -> Result<(), kinsynth::Error> {
+    kinsynth::io::check_output_file(path)?;
+    if kinsynth::io::same_file(path, Path::new("/dev/stdout")) {
+        STDOUT_TAKEN.store(true, std::sync::atomic::Ordering::Relaxed);
+    }
+    Ok(())
 }
 
 pub mod check;

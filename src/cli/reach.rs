@@ -66,10 +66,10 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
     use rayon::prelude::*;
     // Output locations are checked first: nothing is written when one of them is bad.
     if let Some(path) = &json {
-        kinsynth::io::check_output_file(path)?;
+        super::output_file(path)?;
     }
     if let Some(path) = &write_srdf {
-        kinsynth::io::check_output_file(path)?;
+        super::output_file(path)?;
         let same = |other: &Option<PathBuf>| {
             other
                 .as_ref()

@@ -31,6 +31,7 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         output,
         oriented,
     } = args;
+    super::output_file(&output)?;
     let mut spec = preset::generate(p, seed);
     if oriented {
         preset::orient(p, &mut spec, seed);

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 /// Export a design (design JSON or best.json) as a URDF robot and its SRDF.
 ///
 /// Writes the file given by -o and, beside it, the same name with the extension .srdf
-/// (planning group and allowed-collision matrix).
+/// (planning group and allowed-collision matrix), or the file given by --srdf.
 #[derive(clap::Args)]
 pub struct Args {
     /// The design JSON, or an optimiser's best.json.
@@ -14,6 +14,10 @@ pub struct Args {
     /// Output URDF file (written atomically); the robot is named after its stem.
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Output SRDF file. Default: beside the URDF, its name with the extension .srdf; none
+    /// when -o is not a regular file (a device or a pipe such as /dev/stdout).
+    #[arg(long)]
+    pub srdf: Option<PathBuf>,
     /// Scenario whose [robot] self-collision settings (self_collision, allowed_collisions,
     /// self_collision_samples, seed) fill the SRDF. Default: self-collision on, 1000
     /// samples, seed 0.
@@ -26,6 +30,7 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
     let Args {
         design,
         output,
+        srdf,
         scenario,
     } = args;
     let d = kinsynth::Design::load(&design)?;
@@ -33,18 +38,27 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
     let config = s
         .as_ref()
         .map_or_else(Default::default, |s| s.planner.self_collision.clone());
-    let srdf = output.with_extension("srdf");
-    if srdf == output {
+    // Beside a regular file only: `/dev/null.srdf` or `/dev/stdout.srdf` is no place for it.
+    let special = std::fs::metadata(&output).is_ok_and(|m| !m.is_file() && !m.is_dir());
+    let given = srdf.is_some();
+    let srdf = srdf.or_else(|| (!special).then(|| output.with_extension("srdf")));
+    if srdf.as_ref() == Some(&output) {
         return Err(kinsynth::Error::invalid(
             "-o",
             output.display(),
-            "the URDF must not end in .srdf (the SRDF is written beside it under that name)",
+            if given {
+                "is also --srdf"
+            } else {
+                "the URDF must not end in .srdf (the SRDF is written beside it under that name)"
+            },
         ));
     }
     // Both locations are checked before anything is written, so that no URDF is left without
     // its SRDF.
-    kinsynth::io::check_output_file(&output)?;
-    kinsynth::io::check_output_file(&srdf)?;
+    super::output_file(&output)?;
+    if let Some(srdf) = &srdf {
+        super::output_file(srdf)?;
+    }
     // Neither may replace a file the export is made from.
     let mut inputs = vec![(design.as_path(), "the input design")];
     if let (Some(p), Some(s)) = (&scenario, &s) {
@@ -52,18 +66,26 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         inputs.insert(0, (design.as_path(), "the input design"));
     }
     kinsynth::io::check_not_input("-o", &output, &inputs)?;
-    if let Err(kinsynth::Error::InvalidValue { reason, .. }) =
-        kinsynth::io::check_not_input("-o", &srdf, &inputs)
-    {
-        return Err(kinsynth::Error::invalid(
-            "-o",
-            output.display(),
-            format!("the SRDF beside it, {}, {reason}", srdf.display()),
-        ));
+    if let Some(srdf) = &srdf {
+        if let Err(kinsynth::Error::InvalidValue { reason, .. }) =
+            kinsynth::io::check_not_input("--srdf", srdf, &inputs)
+        {
+            return Err(if given {
+                kinsynth::Error::invalid("--srdf", srdf.display(), reason)
+            } else {
+                kinsynth::Error::invalid(
+                    "-o",
+                    output.display(),
+                    format!("the SRDF beside it, {}, {reason}", srdf.display()),
+                )
+            });
+        }
     }
     kinsynth::export::write_urdf(&d, &output)?;
     let body = kinsynth::collision::RobotBody::capsules(&d.chain(), &config);
-    kinsynth::export::srdf::write_body_srdf(&body, None, None, &srdf)?;
+    if let Some(srdf) = &srdf {
+        kinsynth::export::srdf::write_body_srdf(&body, None, None, srdf)?;
+    }
     // A design folded through itself at home is exported as it is (its SRDF keeps the crossing
     // pair enabled), but it cannot start any motion: say so.
     if let Some((a, b)) = body.acm().home_fold() {
@@ -74,13 +96,16 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
     }
     // Counted as `optimize` reports a design: links with a length and axes with a range
     // (paper Eq. 28–29); the URDF has a frame for every link of the chain.
+    let and = srdf.map_or_else(
+        || "; no SRDF (-o is not a regular file: give --srdf FILE for one)".to_string(),
+        |p| format!(" and {}", p.display()),
+    );
     say!(
-        "wrote {} ({} links kept of {}, {} joints kept) and {}",
+        "wrote {} ({} links kept of {}, {} joints kept){and}",
         output.display(),
         d.links_kept(),
         d.links.len(),
         d.joints_kept(),
-        srdf.display()
     );
     Ok(())
 }

@@ -42,7 +42,7 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
             (args.robot.srdf.as_ref(), "the --srdf file"),
         ],
     );
-    kinsynth::io::check_output_file(&args.output)?;
+    super::output_file(&args.output)?;
     kinsynth::io::check_not_input("-o", &args.output, &inputs)?;
     let (chain, joint_names, body) = match args.robot.load(&s)? {
         Some(r) => {
