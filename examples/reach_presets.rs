@@ -48,8 +48,12 @@ fn thread_cpu() -> Option<f64> {
 /// Parses `A-B` (inclusive) or a single `A`.
 fn range(s: &str) -> RangeInclusive<u64> {
     let (a, b) = s.split_once('-').unwrap_or((s, s));
-    let a: u64 = a.parse().expect("a range A-B of integers");
-    let b: u64 = b.parse().expect("a range A-B of integers");
+    let a: u64 = a
+        .parse()
+        .unwrap_or_else(|_| die(format!("{s:?} is not a range A-B of integers")));
+    let b: u64 = b
+        .parse()
+        .unwrap_or_else(|_| die(format!("{s:?} is not a range A-B of integers")));
     a..=b
 }
 
@@ -76,7 +80,9 @@ fn design(s: &Scenario, which: &str, preset: u64, seed: u64) -> Design {
                 .collect();
             s.space.decode(&x)
         }
-        other => panic!("unknown design {other} (largest, middle, smallest or random)"),
+        other => die(format!(
+            "unknown design {other:?} (largest, middle, smallest or random)"
+        )),
     }
 }
 
@@ -169,6 +175,12 @@ fn run_preset(
     out
 }
 
+/// Ends the program with a one-line error and exit code 2 (a malformed command line).
+fn die(message: String) -> ! {
+    eprintln!("reach_presets: {message}");
+    std::process::exit(2)
+}
+
 fn main() {
     let mut settings = Settings {
         checker: CheckerKind::Certified,
@@ -200,18 +212,38 @@ fn main() {
         }
         let value = args
             .next()
-            .unwrap_or_else(|| panic!("{flag} needs a value"));
+            .unwrap_or_else(|| die(format!("{flag} needs a value")));
+        let bad = |what: &str| -> ! { die(format!("{flag} {value:?}: expected {what}")) };
         match flag.as_str() {
-            "--checker" => settings.checker = value.parse().expect("a checker name"),
+            "--checker" => {
+                settings.checker = value
+                    .parse()
+                    .unwrap_or_else(|_| bad("segment, certified, ccd or discrete"))
+            }
             "--design" => which = value,
-            "--iterations" => settings.iterations = Some(value.parse().expect("a count")),
-            "--postures" => settings.postures = Some(value.parse().expect("a count")),
-            "--budget-growth" => settings.budget_growth = Some(value.parse().expect("a factor")),
+            "--iterations" => {
+                settings.iterations = Some(value.parse().unwrap_or_else(|_| bad("a count")))
+            }
+            "--postures" => {
+                settings.postures = Some(value.parse().unwrap_or_else(|_| bad("a count")))
+            }
+            "--budget-growth" => {
+                settings.budget_growth = Some(value.parse().unwrap_or_else(|_| bad("a factor")))
+            }
             "--presets" => presets = range(&value),
             "--seeds" => seeds = range(&value),
-            "--preset" => preset = value.parse().expect("paper-2d or paper-3d"),
-            "--repeat" => repeat = value.parse::<usize>().expect("a count").max(1),
-            _ => panic!("unknown option {flag}"),
+            "--preset" => {
+                preset = value
+                    .parse()
+                    .unwrap_or_else(|_| bad("paper-2d or paper-3d"))
+            }
+            "--repeat" => {
+                repeat = value
+                    .parse::<usize>()
+                    .unwrap_or_else(|_| bad("a count"))
+                    .max(1)
+            }
+            _ => die(format!("unknown option {flag}")),
         }
     }
     println!(

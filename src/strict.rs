@@ -24,6 +24,17 @@ where
     serde_path_to_error::deserialize(Strict(de))
 }
 
+/// The message of a [`deserialize`] error: `path: what`, or only `what` when the whole value is
+/// at fault (its path is `.`).
+pub fn message<E: fmt::Display>(e: &serde_path_to_error::Error<E>) -> String {
+    let path = e.path().to_string();
+    if path == "." {
+        e.inner().to_string()
+    } else {
+        format!("{path}: {}", e.inner())
+    }
+}
+
 /// A deserializer whose structs take only maps.
 struct Strict<D>(D);
 

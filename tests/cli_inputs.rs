@@ -723,6 +723,99 @@ fn outputs_into_stdout_pipes_come_through_alone() {
     }
 }
 
+/// A file of the wrong kind is named as such: a TOML or a URDF given as a design, a best.json
+/// given as a reach report, an SRDF as the URDF and a URDF as the SRDF; a key given twice in a
+/// design is refused (the last one used to win), and a joint that is its own parent is named.
+#[test]
+fn files_of_the_wrong_kind_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let o = |name: &str| d.join(name).into_os_string();
+    let cell = repo("examples/scenarios/ur5-cell.toml");
+    let ur5 = repo("examples/robots/ur5.urdf");
+    let out = o("x.urdf");
+    let args = |v: &[&OsStr]| v.iter().map(|a| a.to_os_string()).collect::<Vec<_>>();
+    let refused = |v: Vec<std::ffi::OsString>, parts: &[&str]| {
+        let v: Vec<&OsStr> = v.iter().map(|a| a.as_os_str()).collect();
+        rejected(&v, parts)
+    };
+    refused(
+        args(&["urdf".as_ref(), cell.as_os_str(), "-o".as_ref(), &out]),
+        &["ur5-cell.toml", "not a JSON object; a design is one"],
+    );
+    refused(
+        args(&["urdf".as_ref(), ur5.as_os_str(), "-o".as_ref(), &out]),
+        &["ur5.urdf", "an XML file such as a URDF"],
+    );
+    let twice = write(
+        d,
+        "twice.json",
+        r#"{"link_radius": 0.02, "link_radius": 0.5, "colliders_per_link": 4, "links": [{"a": 0.3, "axes": {"ry": [-1, 1]}}]}"#,
+    );
+    refused(
+        args(&["urdf".as_ref(), twice.as_os_str(), "-o".as_ref(), &out]),
+        &["twice.json", "duplicate field `link_radius`"],
+    );
+    let best = write(
+        d,
+        "best.json",
+        &format!(
+            r#"{{"cost": 1, "design": {}}}"#,
+            design("0.3", "[-1, 1]", 2)
+        ),
+    );
+    refused(
+        args(&[
+            "view".as_ref(),
+            repo("examples/scenarios/paper-2d.toml").as_os_str(),
+            "--reach".as_ref(),
+            best.as_os_str(),
+            "-o".as_ref(),
+            &o("v.html"),
+        ]),
+        &["best.json", "missing field", "an optimiser's best.json"],
+    );
+    let srdf = write(
+        d,
+        "r.srdf",
+        "<robot name=\"r\">\n<disable_collisions link1=\"a\" link2=\"b\" reason=\"Never\"/>\n</robot>\n",
+    );
+    refused(
+        args(&[
+            "reach".as_ref(),
+            cell.as_os_str(),
+            "--urdf".as_ref(),
+            srdf.as_os_str(),
+        ]),
+        &["r.srdf", "no <link> elements: not a URDF robot"],
+    );
+    refused(
+        args(&[
+            "reach".as_ref(),
+            cell.as_os_str(),
+            "--urdf".as_ref(),
+            ur5.as_os_str(),
+            "--srdf".as_ref(),
+            ur5.as_os_str(),
+        ]),
+        &["ur5.urdf", "<link> elements: a URDF robot, not an SRDF"],
+    );
+    let looped = write(
+        d,
+        "loop.urdf",
+        "<robot name=\"l\"><link name=\"a\"/><joint name=\"j1\" type=\"revolute\"><parent link=\"a\"/><child link=\"a\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/></joint></robot>\n",
+    );
+    refused(
+        args(&[
+            "reach".as_ref(),
+            cell.as_os_str(),
+            "--urdf".as_ref(),
+            looped.as_os_str(),
+        ]),
+        &["loop.urdf", "joint 'j1'", "cycle through link 'a'"],
+    );
+}
+
 /// The scenario's mesh-triangle limit counts distinct meshes: a file placed again with the same
 /// representation and scale shares its shape and adds nothing, one at another scale is another
 /// mesh. An OBJ tetrahedron whose four faces repeat 650,000 times (2.6M triangles) is placed

@@ -140,9 +140,9 @@ fn job(args: &Args, islands: Option<usize>, comm: &dyn Comm) -> Result<(), JobEr
         let g = timings.generations.max(1) as f64;
         let m = timings.migrations.max(1) as f64;
         say!(
-            "{} islands over {} MPI rank(s), migration every {} generations ({} designs); best before the re-check from island {}; per generation {:.2} ms of status exchange, per migration {:.2} ms (after {:.2} ms waiting for the slowest island)",
-            spec.islands,
-            comm.size(),
+            "{} over {}, migration every {} generations ({} designs); best before the re-check from island {}; per generation {:.2} ms of status exchange, per migration {:.2} ms (after {:.2} ms waiting for the slowest island)",
+            count(spec.islands, "island"),
+            count(comm.size(), "MPI rank"),
             spec.migration.interval,
             spec.migration.count,
             summary.islands.as_ref().map_or(0, |i| i.best_island),
@@ -163,4 +163,13 @@ fn hash_of(path: &std::path::Path) -> Result<String, kinsynth::Error> {
         },
     )?;
     Ok(fingerprint(&bytes))
+}
+
+/// `n` and `what`, plural unless `n` is 1 ("1 island", "2 MPI ranks").
+fn count(n: usize, what: &str) -> String {
+    if n == 1 {
+        format!("1 {what}")
+    } else {
+        format!("{n} {what}s")
+    }
 }

@@ -36,7 +36,7 @@ pub struct Args {
     pub json: Option<PathBuf>,
     /// Put the planner's tree (each node's end effector and parent) into the --json report,
     /// for `kinsynth view` to draw.
-    #[arg(long)]
+    #[arg(long, requires = "json")]
     pub tree: bool,
     /// Write the SRDF of the self pairs this run checks (atomically): the allowed-collision
     /// matrix computed for the robot, with the pairs of --srdf for a URDF robot. With the URDF

@@ -306,20 +306,35 @@ impl Design {
                 source,
             },
         )?;
+        // A file that does not start as a JSON object is no design at all: say what it is.
+        let hint = match text.trim_start().chars().next() {
+            Some('{') => "",
+            Some('<') => " (an XML file such as a URDF; a design is a JSON object)",
+            _ => " (not a JSON object; a design is one, as optimize writes in best.json)",
+        };
         let parse_err = |e: serde_json::Error| Error::Parse {
             file: path.to_path_buf(),
-            message: e.to_string(),
+            message: format!("{e}{hint}"),
         };
+        // A best.json holds its design under `design`. The text is read once more as what it
+        // holds (rather than from a parsed value, which keeps the last of two equal keys), so
+        // that a key given twice is refused.
         let value: serde_json::Value = serde_json::from_str(&text).map_err(parse_err)?;
-        let value = match value {
-            serde_json::Value::Object(mut m) if m.contains_key("design") => {
-                m.remove("design").unwrap_or_default()
-            }
-            v => v,
+        let wrapped = matches!(&value, serde_json::Value::Object(m) if m.contains_key("design"));
+        /// A best.json: the design and whatever else it holds.
+        #[derive(Deserialize)]
+        struct Wrapped {
+            design: Design,
+        }
+        let mut de = serde_json::Deserializer::from_str(&text);
+        let parsed = if wrapped {
+            crate::strict::deserialize(&mut de).map(|w: Wrapped| w.design)
+        } else {
+            crate::strict::deserialize(&mut de)
         };
-        let design: Design = crate::strict::deserialize(value).map_err(|e| Error::Parse {
+        let design: Design = parsed.map_err(|e| Error::Parse {
             file: path.to_path_buf(),
-            message: format!("{}: {}", e.path(), e.inner()),
+            message: crate::strict::message(&e),
         })?;
         design.validate().map_err(|e| e.in_file(path))?;
         Ok(design)

@@ -848,6 +848,18 @@ pub fn read_srdf(path: &Path, robot: &urdf_rs::Robot, urdf: &Path) -> Result<Vec
     crate::limits::check_xml_depth(&text, crate::limits::MAX_XML_DEPTH).map_err(parse)?;
     let doc =
         roxmltree::Document::parse(&text).map_err(|e| parse(format!("not a valid SRDF: {e}")))?;
+    // A URDF given as the SRDF would read as one without pairs.
+    if let Some(n) = doc
+        .root_element()
+        .children()
+        .find(|n| n.has_tag_name("link") || n.has_tag_name("joint"))
+    {
+        return Err(parse(format!(
+            "line {}: <{}> elements: a URDF robot, not an SRDF (the URDF goes to --urdf)",
+            doc.text_pos_at(n.range().start).row,
+            n.tag_name().name()
+        )));
+    }
     let mut out = Vec::new();
     let links: std::collections::HashSet<&str> =
         robot.links.iter().map(|l| l.name.as_str()).collect();

@@ -740,11 +740,30 @@ pub fn chain_from_urdf(
                 .collect();
             match roots.as_slice() {
                 [r] => r.to_string(),
-                [] => {
+                [] if robot.links.is_empty() => {
                     return Err(urdf_err(
                         format!("robot '{}'", robot.name),
-                        "not a tree: no root link (every link is some joint's child)",
+                        "no <link> elements: not a URDF robot (an SRDF goes to --srdf)",
                     ))
+                }
+                [] => {
+                    // Every link is some joint's child: following the parents from any link
+                    // comes back round; the joint that closes the loop is named.
+                    let mut seen = std::collections::HashSet::new();
+                    let mut at = robot.links[0].name.as_str();
+                    let j = loop {
+                        let j = parent_joint[at];
+                        if !seen.insert(at) {
+                            break j;
+                        }
+                        at = &j.parent.link;
+                    };
+                    return Err(urdf_err(
+                        describe(j),
+                        format!(
+                            "not a tree: no root link (every link is some joint's child); the joints form a cycle through link '{at}'"
+                        ),
+                    ));
                 }
                 _ => {
                     return Err(urdf_err(

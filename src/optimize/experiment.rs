@@ -449,6 +449,11 @@ pub fn merge(dirs: &[std::path::PathBuf], out: &Path) -> Result<Vec<RunRecord>> 
             "give the folders of the slices to merge",
         ));
     };
+    // Each folder must be a slice (a folder that is not one is named as such first).
+    let manifests: Vec<Manifest> = dirs
+        .iter()
+        .map(|d| read_manifest(d))
+        .collect::<Result<_>>()?;
     // The slices' folders are only read: the tables written into one would replace its own.
     let slices: Vec<(&Path, String)> = dirs
         .iter()
@@ -456,10 +461,6 @@ pub fn merge(dirs: &[std::path::PathBuf], out: &Path) -> Result<Vec<RunRecord>> 
         .collect();
     let slices: Vec<(&Path, &str)> = slices.iter().map(|(d, w)| (*d, w.as_str())).collect();
     crate::io::check_dir_outside("--out", out, &slices)?;
-    let manifests: Vec<Manifest> = dirs
-        .iter()
-        .map(|d| read_manifest(d))
-        .collect::<Result<_>>()?;
     let spec = manifests[0].spec.clone();
     let mut owner: Vec<Option<usize>> = vec![None; spec.runs];
     for (i, m) in manifests.iter().enumerate() {

@@ -613,7 +613,7 @@ impl<'r, 'a> IslandJob<'r, 'a> {
                 "--islands",
                 n,
                 format!(
-                    "must be a multiple of the number of MPI ranks ({size}), at most {}",
+                    "must be at least 1, a multiple of the number of MPI ranks ({size}) and at most {}",
                     crate::limits::MAX_POPULATION
                 ),
             ));

@@ -367,9 +367,19 @@ pub fn load_reach(path: &Path, tasks: &[nalgebra::Point3<f64>], dof: usize) -> R
             }
         })?;
     let mut de = serde_json::Deserializer::from_str(&text);
-    let report: ReachReport = crate::strict::deserialize(&mut de).map_err(|e| Error::Parse {
-        file: path.to_path_buf(),
-        message: format!("{}: {}", e.path(), e.inner()),
+    let report: ReachReport = crate::strict::deserialize(&mut de).map_err(|e| {
+        // An optimiser's best.json (which holds a design) is the likeliest wrong file.
+        let best = serde_json::from_str::<serde_json::Value>(&text)
+            .is_ok_and(|v| v.get("design").is_some());
+        let hint = if best {
+            " (an optimiser's best.json: --reach takes the report of `reach --json`)"
+        } else {
+            ""
+        };
+        Error::Parse {
+            file: path.to_path_buf(),
+            message: format!("{}{hint}", crate::strict::message(&e)),
+        }
     })?;
     let bad = |field: String, value: String, reason: String| {
         Error::invalid(field, value, reason).in_file(path)
