@@ -111,6 +111,9 @@ fn writes_every_output_with_the_documented_shape() {
     let reach: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("reach.json")).unwrap()).unwrap();
     assert_eq!(reach["reachability"], best["reachability"]);
+    // The stream it was planned with, as `reach --json` writes it: replaying best.json gives
+    // the same file.
+    assert_eq!(reach["stream"], best["stream"]);
     assert!(std::fs::read_to_string(out.join("convergence.svg"))
         .unwrap()
         .starts_with("<svg"));
@@ -126,13 +129,21 @@ fn writes_every_output_with_the_documented_shape() {
     let files = std::fs::read_dir(out.join("trajectories")).unwrap().count();
     assert_eq!(files, 2 * reached);
     // best.json is accepted by `reach --design`, and gives the same R with the same stream.
+    let replayed = dir.path().join("replayed.json");
     let o = Command::new(BIN)
         .args(["reach", "--design"])
         .arg(out.join("best.json"))
         .arg(scenario())
+        .arg("--json")
+        .arg(&replayed)
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(
+        std::fs::read_to_string(&replayed).unwrap(),
+        std::fs::read_to_string(out.join("reach.json")).unwrap(),
+        "the replay's report is the run's reach.json"
+    );
     // The baseline flag selects ASA with node-only checks at π/40.
     let base = dir.path().join("baseline");
     let o = optimize(&base, &["--baseline", "--evaluations", "32"])
@@ -270,4 +281,22 @@ fn an_evaluation_budget_replaces_the_scenario_time_limit() {
         limited.is_some_and(|n| (1..96).contains(&n)),
         "the scenario's time limit did not stop it: {limited:?}"
     );
+}
+
+/// A new run in a folder that holds an earlier run's results says that it replaces them; a
+/// first run says nothing of the kind.
+#[test]
+fn a_new_run_in_a_used_folder_says_it_replaces_the_results() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    for first in [true, false] {
+        let o = optimize(&out, &["--evaluations", "4"]).output().unwrap();
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{stderr}");
+        assert_eq!(
+            stderr.contains("replacing the results of an earlier run"),
+            !first,
+            "{stderr}"
+        );
+    }
 }

@@ -278,6 +278,9 @@ def package_dirs_of(argv):
 
 
 def main():
+    if any(a in ("-h", "--help") for a in sys.argv[1:]):
+        print(__doc__.strip())
+        return
     args, package_dirs = package_dirs_of(sys.argv[1:])
     if len(args) not in (4, 5):
         usage = __doc__[__doc__.index("usage:") :].split("\n\n")[0]

@@ -138,7 +138,7 @@ pub struct UrdfRobot {
     #[arg(long, requires = "urdf")]
     pub tip_frame: Option<String>,
     /// Capsule radius of the URDF robot's links (m). Default: the largest radius of its
-    /// collision cylinders and spheres, else 0.05.
+    /// collision cylinders, capsules and spheres, else 0.05.
     #[arg(long, requires = "urdf")]
     pub radius: Option<f64>,
     /// Bodies of the URDF robot's links: `collision` (their <collision> meshes, boxes,

@@ -337,6 +337,19 @@ pub fn prepare(args: &Args) -> Result<Prepared, kinsynth::Error> {
         }
         kinsynth::io::check_output_dir(&out.join(files::TRAJECTORIES))?;
     }
+    // A new run in a folder that holds an earlier run's results replaces them (`--resume DIR`
+    // continues that run instead): say so.
+    if resume.is_none() {
+        use kinsynth::optimize::output::files;
+        let earlier = out.join(files::BEST);
+        if earlier.is_file() {
+            eprintln!(
+                "warning: {}: replacing the results of an earlier run (--resume {} continues it instead)",
+                out.display(),
+                out.display()
+            );
+        }
+    }
     // Read again under the lock: the state the last run left.
     let checkpoint = match &resume {
         Some(dir) => Some(Runner::read_checkpoint(dir)?),

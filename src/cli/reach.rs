@@ -263,8 +263,7 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         }
     }
     if let Some(path) = json {
-        let mut v = serde_json::to_value(&report).expect("a report serialises");
-        v["stream"] = stream.into();
+        let mut v = report.to_json_value(stream);
         if let Some(spread) = spread {
             v["spread"] = spread;
         }

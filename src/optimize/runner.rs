@@ -1116,7 +1116,9 @@ impl<'a> Runner<'a> {
                 .expect("numbers serialise")
                 .as_bytes(),
         )?;
-        write_atomic(&self.out.join(files::REACH), report.to_json().as_bytes())?;
+        let reach = serde_json::to_string_pretty(&report.to_json_value(summary.stream))
+            .expect("a report serialises");
+        write_atomic(&self.out.join(files::REACH), reach.as_bytes())?;
         crate::export::write_urdf(&summary.design, &self.out.join(files::URDF))?;
         crate::export::write_srdf(
             &summary.design,

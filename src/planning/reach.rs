@@ -112,6 +112,14 @@ impl ReachReport {
     pub fn to_json(&self) -> String {
         serde_json::to_string_pretty(self).expect("a report always serialises")
     }
+
+    /// The report as JSON with the random `stream` it was planned with (`"stream"`), as
+    /// `kinsynth reach --json` and an optimiser's `reach.json` write it.
+    pub fn to_json_value(&self, stream: u64) -> serde_json::Value {
+        let mut v = serde_json::to_value(self).expect("a report always serialises");
+        v["stream"] = stream.into();
+        v
+    }
 }
 
 /// The random stream of a reachability evaluation: ChaCha8 seeded with `seed`, on stream
