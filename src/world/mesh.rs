@@ -107,7 +107,7 @@ pub enum MeshError {
         extension: Option<String>,
     },
     /// The file could not be parsed.
-    #[error("{}: cannot parse as {format}: {}", .path.display(), crate::error::one_line(.message))]
+    #[error("{}: cannot parse as {format}: {}", .path.display(), crate::error::shorten(&crate::error::one_line(.message)))]
     Parse {
         /// The file.
         path: PathBuf,
@@ -1012,8 +1012,16 @@ fn parse_stl(path: &Path, bytes: &[u8]) -> Result<MeshData, MeshError> {
         }
     };
 
-    let indexed = stl_io::read_stl(&mut Cursor::new(input.as_ref()))
-        .map_err(|e| parse_error(format, e.to_string().replace('\n', " ")))?;
+    let indexed = stl_io::read_stl(&mut Cursor::new(input.as_ref())).map_err(|e| {
+        let said = e.to_string().replace('\n', " ");
+        // An ASCII file's fault is named by its line, as the reader checks it.
+        match ascii.then(|| ascii_stl_error_line(bytes)).flatten() {
+            Some((line, what, text)) => {
+                parse_error(format, format!("line {line}: {what}: `{text}`"))
+            }
+            None => parse_error(format, said),
+        }
+    })?;
     if indexed.faces.len() > crate::limits::MAX_MESH_TRIANGLES {
         return Err(parse_error(
             format,
@@ -1066,6 +1074,87 @@ fn solid_keyword_offset(bytes: &[u8]) -> Option<usize> {
     let after = bytes.get(start + 5).copied();
     (word.eq_ignore_ascii_case(b"solid") && after.is_none_or(|b| b.is_ascii_whitespace()))
         .then_some(start)
+}
+
+/// The first line of the ASCII STL `bytes` that breaks the grammar stl_io reads (blank lines
+/// skipped; the first line is the `solid` header): `facet normal x y z` or `endsolid`, then
+/// `outer loop`, three `vertex x y z`, `endloop`, `endfacet`, with every number a finite
+/// 32-bit float. Its number (from 1), what was expected and its text as [`quote`] gives it;
+/// for a file that ends early, its last line. `None` when no line breaks it.
+fn ascii_stl_error_line(bytes: &[u8]) -> Option<(usize, String, String)> {
+    /// What the next line must be.
+    #[derive(Clone, Copy, PartialEq)]
+    enum Next {
+        Header,
+        Facet,
+        Loop,
+        Vertex(u8),
+        EndLoop,
+        EndFacet,
+    }
+    let finite = |w: &str| w.parse::<f32>().is_ok_and(f32::is_finite);
+    let numbers = |words: &[&str]| -> Option<String> {
+        words.iter().find(|w| !finite(w)).map(|w| {
+            format!(
+                "`{}` is not a finite 32-bit number",
+                crate::error::shorten(w)
+            )
+        })
+    };
+    let mut next = Next::Header;
+    let mut last = (0, String::new());
+    for (number, raw) in bytes.split(|&b| b == b'\n').enumerate() {
+        let line = String::from_utf8_lossy(raw);
+        let words: Vec<&str> = line.split_whitespace().collect();
+        if words.is_empty() {
+            continue;
+        }
+        last = (number + 1, quote(&line));
+        let fault = match next {
+            Next::Header => {
+                next = Next::Facet;
+                None
+            }
+            Next::Facet if words[0] == "endsolid" => return None,
+            Next::Facet => {
+                next = Next::Loop;
+                if words.len() != 5 || words[0] != "facet" || words[1] != "normal" {
+                    Some("expected `facet normal x y z` or `endsolid`".to_string())
+                } else {
+                    numbers(&words[2..])
+                }
+            }
+            Next::Loop => {
+                next = Next::Vertex(0);
+                (words != ["outer", "loop"]).then(|| "expected `outer loop`".to_string())
+            }
+            Next::Vertex(k) => {
+                next = if k == 2 {
+                    Next::EndLoop
+                } else {
+                    Next::Vertex(k + 1)
+                };
+                if words.len() != 4 || words[0] != "vertex" {
+                    Some("expected `vertex x y z`".to_string())
+                } else {
+                    numbers(&words[1..])
+                }
+            }
+            Next::EndLoop => {
+                next = Next::EndFacet;
+                (words != ["endloop"]).then(|| "expected `endloop`".to_string())
+            }
+            Next::EndFacet => {
+                next = Next::Facet;
+                (words != ["endfacet"]).then(|| "expected `endfacet`".to_string())
+            }
+        };
+        if let Some(what) = fault {
+            return Some((number + 1, what, last.1));
+        }
+    }
+    let (line, text) = last;
+    Some((line, "the file ends before `endsolid`".to_string(), text))
 }
 
 /// Parses OBJ bytes with tobj, merging all models into one mesh.
@@ -1794,6 +1883,46 @@ f -3 -2 -1
         assert!(message.contains("line 6: face"), "{message}");
         assert!(message.ends_with("…`"), "{message}");
         assert!(message.len() < 250, "{message}");
+    }
+
+    /// An ASCII STL the reader refuses is named with the line that breaks its grammar, quoted.
+    #[test]
+    fn ascii_stl_errors_name_the_line() {
+        let dir = tempfile::tempdir().unwrap();
+        let facet = "facet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\n";
+        let cases = [
+            (
+                "facet normal 0 0 1\nouter loop\nvertex 0 0 NaN\n",
+                "line 11: `NaN` is not a finite 32-bit number: `vertex 0 0 NaN`",
+            ),
+            (
+                "facet normal 0 0 1\nouter loop\n\n  vertex 0 0 1e39\n",
+                "line 12: `1e39` is not a finite 32-bit number: `vertex 0 0 1e39`",
+            ),
+            (
+                "facet normal 0 0 1\nouter loop\nvertex 0 0 0\nendloop\n",
+                "line 12: expected `vertex x y z`: `endloop`",
+            ),
+            (
+                "facet normal 0 0\n",
+                "line 9: expected `facet normal x y z` or `endsolid`: `facet normal 0 0`",
+            ),
+            (
+                "facet normal 0 0 1\nouter  lop\n",
+                "line 10: expected `outer loop`: `outer  lop`",
+            ),
+            ("", "line 8: the file ends before `endsolid`: `endfacet`"),
+        ];
+        for (bad, expected) in cases {
+            let text = format!("solid x\n{facet}{bad}");
+            let message = load_err(&write(&dir, "bad.stl", text.as_bytes()));
+            assert!(
+                message.contains(&format!("cannot parse as ASCII STL: {expected}")),
+                "{bad:?}: {message}"
+            );
+        }
+        let good = format!("solid x\n{facet}endsolid x\n");
+        assert!(load_mesh(&write(&dir, "good.stl", good.as_bytes())).is_ok());
     }
 
     #[test]
