@@ -446,6 +446,43 @@ fn check_collada(text: &str) -> std::result::Result<u64, String> {
     /// Largest `<input offset>` of a primitive (real files use a handful of inputs).
     const MAX_OFFSET: u64 = 1024;
     let doc = roxmltree::Document::parse(text).map_err(|e| format!("not a readable mesh: {e}"))?;
+    // The asset's unit scales every vertex (a negative one would mirror the body, zero collapse
+    // it); its up axis is one of the three the format names.
+    for n in doc
+        .root_element()
+        .children()
+        .filter(|n| n.has_tag_name("asset"))
+    {
+        for c in n.children().filter(|c| c.is_element()) {
+            let line = || doc.text_pos_at(c.range().start).row;
+            match c.tag_name().name() {
+                "unit" => {
+                    let Some(v) = c.attribute("meter") else {
+                        continue;
+                    };
+                    let meter = v.trim().replace(',', ".").parse::<f32>();
+                    if !meter.is_ok_and(|m| m.is_finite() && m > 0.0) {
+                        return Err(format!(
+                            "line {}: <unit meter=\"{}\">: must be a positive number (metres per unit)",
+                            line(),
+                            crate::error::shorten(v)
+                        ));
+                    }
+                }
+                "up_axis" => {
+                    let axis = c.text().unwrap_or("").trim();
+                    if !matches!(axis, "X_UP" | "Y_UP" | "Z_UP") {
+                        return Err(format!(
+                            "line {}: <up_axis>{}</up_axis>: must be X_UP, Y_UP or Z_UP",
+                            line(),
+                            crate::error::shorten(axis)
+                        ));
+                    }
+                }
+                _ => {}
+            }
+        }
+    }
     let Some(geometries) = doc
         .root_element()
         .children()
@@ -1162,6 +1199,33 @@ mod tests {
         );
         let edited = format!("{}{polylist}{}", &text[..start], &text[end..]);
         assert_eq!(check_collada(&edited), Ok(2 + 3 + 4));
+        // The asset's unit and up axis.
+        for (from, to, says) in [
+            (
+                "meter=\"1\"",
+                "meter=\"-1\"",
+                "<unit meter=\"-1\">: must be a positive number",
+            ),
+            (
+                "meter=\"1\"",
+                "meter=\"0\"",
+                "<unit meter=\"0\">: must be a positive number",
+            ),
+            (
+                "Z_UP",
+                "W_UP",
+                "<up_axis>W_UP</up_axis>: must be X_UP, Y_UP or Z_UP",
+            ),
+        ] {
+            assert!(text.contains(from), "{from}");
+            let e = check_collada(&text.replacen(from, to, 1)).unwrap_err();
+            assert!(
+                e.starts_with("line 7: ") || e.starts_with("line 8: "),
+                "{e}"
+            );
+            assert!(e.contains(says), "{e}");
+        }
+        assert!(check_collada(&text.replacen("meter=\"1\"", "meter=\"0,001\"", 1)).is_ok());
     }
 
     #[test]
