@@ -693,6 +693,53 @@ fn outputs_into_stdout_pipes_come_through_alone() {
     ]);
     assert!(srdf.is_file(), "{said}");
     assert!(!Path::new("/dev/null.srdf").exists());
+    // The same file as -o, however spelt, is refused as --srdf.
+    let o = dir.path().join("o.urdf");
+    let dotted = dir.path().join(".").join("o.urdf");
+    rejected(
+        &[
+            "urdf".as_ref(),
+            d.as_os_str(),
+            "-o".as_ref(),
+            o.as_os_str(),
+            "--srdf".as_ref(),
+            dotted.as_os_str(),
+        ],
+        &["is also --srdf"],
+    );
+    assert!(!o.exists());
+    // stdout redirected to a file: the URDF alone goes there, and no SRDF beside /dev/stdout.
+    let file = dir.path().join("redirected.urdf");
+    let out = Command::new(BIN)
+        .args([
+            OsStr::new("urdf"),
+            d.as_os_str(),
+            "-o".as_ref(),
+            "/dev/stdout".as_ref(),
+        ])
+        .stdout(std::fs::File::create(&file).unwrap())
+        .output()
+        .unwrap();
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success() && said.contains("no SRDF"), "{said}");
+    let urdf = std::fs::read_to_string(&file).unwrap();
+    assert!(
+        urdf.starts_with("<?xml") && urdf.trim_end().ends_with("</robot>"),
+        "{urdf}"
+    );
+    // stdout and the output both /dev/null: the messages stay on stdout (not on stderr).
+    let out = Command::new(BIN)
+        .args([
+            OsStr::new("reach"),
+            cell.as_os_str(),
+            "--json".as_ref(),
+            "/dev/null".as_ref(),
+        ])
+        .stdout(Stdio::null())
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    assert_eq!(String::from_utf8_lossy(&out.stderr), "");
 
     // `reach … --json FILE | head -c 1`: the reader is gone after the first line, the JSON
     // is written all the same.

@@ -33,7 +33,22 @@ pub static STDOUT_CLOSED: std::sync::atomic::AtomicBool = std::sync::atomic::Ato
 /// from now on.
 pub fn output_file(path: &Path) -> Result<(), kinsynth::Error> {
     kinsynth::io::check_output_file(path)?;
-    if kinsynth::io::same_file(path, Path::new("/dev/stdout")) {
+    // A device (a terminal, /dev/null) shared with stdout keeps the messages where they were:
+    // only a pipe or a file would mix them into the output's bytes.
+    let stdout = Path::new("/dev/stdout");
+    let shared = std::fs::metadata(stdout).is_ok_and(|m| {
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::FileTypeExt;
+            !m.file_type().is_char_device()
+        }
+        #[cfg(not(unix))]
+        {
+            let _ = m;
+            true
+        }
+    });
+    if shared && kinsynth::io::same_file(path, stdout) {
         STDOUT_TAKEN.store(true, std::sync::atomic::Ordering::Relaxed);
     }
     Ok(())

@@ -38,11 +38,21 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
     let config = s
         .as_ref()
         .map_or_else(Default::default, |s| s.planner.self_collision.clone());
-    // Beside a regular file only: `/dev/null.srdf` or `/dev/stdout.srdf` is no place for it.
-    let special = std::fs::metadata(&output).is_ok_and(|m| !m.is_file() && !m.is_dir());
+    // Beside a regular file only: `/dev/null.srdf` or `/dev/stdout.srdf` is no place for it
+    // (stdout redirected to a file is still written through /dev/stdout).
+    let written = std::path::absolute(&output).unwrap_or_else(|_| output.clone());
+    let special = std::fs::metadata(&output).is_ok_and(|m| !m.is_file() && !m.is_dir())
+        || written.starts_with("/dev")
+        || written.starts_with("/proc")
+        || kinsynth::io::same_file(&output, std::path::Path::new("/dev/stdout"));
     let given = srdf.is_some();
     let srdf = srdf.or_else(|| (!special).then(|| output.with_extension("srdf")));
-    if srdf.as_ref() == Some(&output) {
+    // The same file however spelt (`-o o.urdf --srdf ./o.urdf`).
+    let same = |a: &std::path::Path| {
+        kinsynth::io::resolve(a) == kinsynth::io::resolve(&output)
+            || kinsynth::io::same_file(a, &output)
+    };
+    if srdf.as_deref().is_some_and(same) {
         return Err(kinsynth::Error::invalid(
             "-o",
             output.display(),

@@ -954,8 +954,32 @@ fn parse_stl(path: &Path, bytes: &[u8]) -> Result<MeshData, MeshError> {
             Some(newline) => &bytes[start + newline + 1..],
             None => &[][..],
         };
+        // A file of several solids (`endsolid`, then `solid` again) is read whole: the lines
+        // between them are dropped, and the last `endsolid` ends the one solid read.
         let mut normalised = b"solid mesh\n".to_vec();
-        normalised.extend_from_slice(rest);
+        let mut ended = false;
+        for line in rest.split_inclusive(|&b| b == b'\n') {
+            let first = line
+                .split(|b| b.is_ascii_whitespace())
+                .find(|w| !w.is_empty());
+            match first {
+                Some(b"endsolid") => ended = true,
+                Some(b"solid") if ended => ended = false,
+                None => {} // a blank line
+                _ => {
+                    ended = false;
+                    normalised.extend_from_slice(line);
+                    if !line.ends_with(b"\n") {
+                        normalised.push(b'\n');
+                    }
+                }
+            }
+        }
+        if rest.split(|&b| b == b'\n').any(|l| {
+            l.split(|b| b.is_ascii_whitespace()).find(|w| !w.is_empty()) == Some(b"endsolid")
+        }) {
+            normalised.extend_from_slice(b"endsolid mesh\n");
+        }
         ("ASCII STL", Cow::Owned(normalised))
     } else {
         let format = "binary STL";
@@ -1086,6 +1110,7 @@ fn ascii_stl_error_line(bytes: &[u8]) -> Option<(usize, String, String)> {
     #[derive(Clone, Copy, PartialEq)]
     enum Next {
         Header,
+        AfterEnd,
         Facet,
         Loop,
         Vertex(u8),
@@ -1101,9 +1126,13 @@ fn ascii_stl_error_line(bytes: &[u8]) -> Option<(usize, String, String)> {
             )
         })
     };
+    // From the `solid` keyword on (after a byte order mark or blank lines), numbered in the file.
+    let start = solid_keyword_offset(bytes).unwrap_or(0);
+    let before = bytes[..start].iter().filter(|&&b| b == b'\n').count();
     let mut next = Next::Header;
     let mut last = (0, String::new());
-    for (number, raw) in bytes.split(|&b| b == b'\n').enumerate() {
+    for (number, raw) in bytes[start..].split(|&b| b == b'\n').enumerate() {
+        let number = number + before;
         let line = String::from_utf8_lossy(raw);
         let words: Vec<&str> = line.split_whitespace().collect();
         if words.is_empty() {
@@ -1115,7 +1144,15 @@ fn ascii_stl_error_line(bytes: &[u8]) -> Option<(usize, String, String)> {
                 next = Next::Facet;
                 None
             }
-            Next::Facet if words[0] == "endsolid" => return None,
+            // Another solid may follow; the reader takes them all as one.
+            Next::AfterEnd => {
+                next = Next::Facet;
+                (words[0] != "solid").then(|| "expected `solid` or the end of the file".to_string())
+            }
+            Next::Facet if words[0] == "endsolid" => {
+                next = Next::AfterEnd;
+                None
+            }
             Next::Facet => {
                 next = Next::Loop;
                 if words.len() != 5 || words[0] != "facet" || words[1] != "normal" {
@@ -1153,6 +1190,9 @@ fn ascii_stl_error_line(bytes: &[u8]) -> Option<(usize, String, String)> {
             return Some((number + 1, what, last.1));
         }
     }
+    if next == Next::AfterEnd {
+        return None;
+    }
     let (line, text) = last;
     Some((line, "the file ends before `endsolid`".to_string(), text))
 }
@@ -1174,6 +1214,15 @@ fn parse_obj(path: &Path, bytes: &[u8]) -> Result<MeshData, MeshError> {
             .map(|&b| if b == b'\r' { b'\n' } else { b })
             .collect();
         &converted[..]
+    } else {
+        bytes
+    };
+    // Text in another encoding (Latin-1 is common) only in comments and names does not touch
+    // the geometry: those lines are read with the bytes replaced. Elsewhere it is an error.
+    let lossy: Vec<u8>;
+    let bytes = if std::str::from_utf8(bytes).is_err() && obj_bad_text_only_in_names(bytes) {
+        lossy = String::from_utf8_lossy(bytes).into_owned().into_bytes();
+        &lossy[..]
     } else {
         bytes
     };
@@ -1256,6 +1305,22 @@ fn parse_obj(path: &Path, bytes: &[u8]) -> Result<MeshData, MeshError> {
     Ok(mesh)
 }
 
+/// True when every line of the OBJ `bytes` that is not valid UTF-8 is a comment or names
+/// something (`#`, `o`, `g`, `s`, `usemtl`, `mtllib`): lines whose text does not matter to the
+/// geometry.
+fn obj_bad_text_only_in_names(bytes: &[u8]) -> bool {
+    bytes
+        .split(|&b| b == b'\n')
+        .filter(|line| std::str::from_utf8(line).is_err())
+        .all(|line| {
+            let mut words = line
+                .split(|b| b.is_ascii_whitespace())
+                .filter(|w| !w.is_empty());
+            let first = words.next().unwrap_or(b"");
+            first.starts_with(b"#") || matches!(first, b"o" | b"g" | b"s" | b"usemtl" | b"mtllib")
+        })
+}
+
 /// The first `f` line of the OBJ `bytes` with fewer than three vertices, with its text as
 /// [`quote`] gives it.
 fn obj_short_face(bytes: &[u8]) -> Option<(usize, String)> {
@@ -1302,22 +1367,26 @@ fn obj_error_line(bytes: &[u8], error: tobj::LoadError) -> Option<(usize, String
     let floats = |words: &[&str], n: usize| {
         words.len() >= n && words[..n].iter().all(|w| w.parse::<f64>().is_ok())
     };
-    // Totals for face indices, which tobj resolves once the whole object is read.
-    let (mut total_v, mut total_vt, mut total_vn) = (0usize, 0usize, 0usize);
+    // The positions, texture coordinates and normals read when each object ends (at the next
+    // `o` or `g` line, or the end of the file): tobj checks a face's positive indices then.
+    let mut ends: Vec<[usize; 3]> = Vec::new();
     if error == E::FaceVertexOutOfBounds
         || error == E::FaceTexCoordOutOfBounds
         || error == E::FaceNormalOutOfBounds
     {
+        let mut counts = [0usize; 3];
         for line in bytes.split(|&b| b == b'\n') {
-            let line = String::from_utf8_lossy(line);
-            match line.split_whitespace().next() {
-                Some("v") => total_v += 1,
-                Some("vt") => total_vt += 1,
-                Some("vn") => total_vn += 1,
+            match String::from_utf8_lossy(line).split_whitespace().next() {
+                Some("v") => counts[0] += 1,
+                Some("vt") => counts[1] += 1,
+                Some("vn") => counts[2] += 1,
+                Some("o") | Some("g") => ends.push(counts),
                 _ => {}
             }
         }
+        ends.push(counts);
     }
+    let mut object = 0;
     let (mut v, mut vt, mut vn) = (0isize, 0isize, 0isize);
     for (number, raw) in bytes.split(|&b| b == b'\n').enumerate() {
         let Ok(line) = std::str::from_utf8(raw) else {
@@ -1351,16 +1420,26 @@ fn obj_error_line(bytes: &[u8], error: tobj::LoadError) -> Option<(usize, String
                 vn += 1;
                 error == E::NormalParseError && !floats(&words, 3)
             }
-            Some("f") | Some("l") => words.iter().any(|corner| {
+            Some("o") | Some("g") => {
+                object += 1;
+                false
+            }
+            // tobj parses `l` lines as faces but (ignoring lines) never resolves their indices.
+            Some(kind @ ("f" | "l")) => words.iter().any(|corner| {
                 let parts: Vec<&str> = corner.split('/').collect();
                 if error == E::FaceParseError {
-                    return parts.len() > 3
+                    return parts.iter().skip(3).any(|p| !p.is_empty())
                         || parts
                             .iter()
                             .any(|p| !p.is_empty() && p.parse::<isize>().is_err());
                 }
+                if kind == "l" {
+                    return false;
+                }
+                let end = ends.get(object).copied().unwrap_or_default();
                 // Index `k` of a corner against the count seen so far (negative, relative)
-                // or in the whole file (positive, from 1).
+                // or at the end of its object (positive, from 1). A position index of 0 is
+                // out of range; a texture or normal index of 0 counts as none.
                 let out = |k: usize, seen: isize, total: usize| {
                     parts
                         .get(k)
@@ -1369,14 +1448,14 @@ fn obj_error_line(bytes: &[u8], error: tobj::LoadError) -> Option<(usize, String
                             if i < 0 {
                                 seen + i < 0
                             } else {
-                                i == 0 || i as usize > total
+                                (i == 0 && k == 0) || i as usize > total
                             }
                         })
                 };
                 match error {
-                    E::FaceVertexOutOfBounds => out(0, v, total_v),
-                    E::FaceTexCoordOutOfBounds => total_vt > 0 && out(1, vt, total_vt),
-                    E::FaceNormalOutOfBounds => total_vn > 0 && out(2, vn, total_vn),
+                    E::FaceVertexOutOfBounds => out(0, v, end[0]),
+                    E::FaceTexCoordOutOfBounds => end[1] > 0 && out(1, vt, end[1]),
+                    E::FaceNormalOutOfBounds => end[2] > 0 && out(2, vn, end[2]),
                     _ => false,
                 }
             }),
@@ -1865,6 +1944,45 @@ f -3 -2 -1
             let message = load_err(&path);
             assert!(message.contains(expected), "{bad:?}: {message}");
         }
+        // Where tobj's own rules differ from a plain reading: `l` indices are never resolved, a
+        // texture index of 0 is none, an empty fourth part of a corner is allowed, and positive
+        // indices count the positions read when their object ends.
+        let v4 = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n";
+        for (text, expected) in [
+            (
+                format!("{v4}l 1 9\nf 1 2 9\n"),
+                "line 6: face vertex index out of bounds",
+            ),
+            (
+                format!("{v4}vt 0 0\nf 1/0 2/1 3/1\nf 1/1 2/1 3/5\n"),
+                "line 7: face texcoord index out of bounds",
+            ),
+            (
+                format!("{v4}f 1/1/1/ 2 3\nf 1 2 x\n"),
+                "line 6: face parse error",
+            ),
+            (
+                format!("o a\n{v4}f 1 2 5\no b\nv 1 1 1\nf 1 2 9\n"),
+                "line 6: face vertex index out of bounds: `f 1 2 5`",
+            ),
+        ] {
+            let message = load_err(&write(&dir, "rules.obj", text.as_bytes()));
+            assert!(message.contains(expected), "{text:?}: {message}");
+        }
+        // Another encoding in a comment or a name is read; in a number it is an error.
+        let latin = [
+            b"# Cr\xe9\xe9 par\no pi\xe8ce\n".as_slice(),
+            good.as_bytes(),
+            b"f 1 2 3\n",
+        ]
+        .concat();
+        assert!(load_mesh(&write(&dir, "latin.obj", &latin)).is_ok());
+        let latin = [good.as_bytes(), b"v 1 \xe9 2\nf 1 2 3\n"].concat();
+        let message = load_err(&write(&dir, "latin_bad.obj", &latin));
+        assert!(
+            message.contains("line 6: the file is not valid UTF-8 text"),
+            "{message}"
+        );
         // A byte order mark, and carriage returns alone as line ends, are read.
         let bom = format!("\u{feff}{good}f 1 2 3\n");
         assert!(load_mesh(&write(&dir, "bom.obj", bom.as_bytes())).is_ok());
@@ -1923,6 +2041,28 @@ f -3 -2 -1
         }
         let good = format!("solid x\n{facet}endsolid x\n");
         assert!(load_mesh(&write(&dir, "good.stl", good.as_bytes())).is_ok());
+        // After a byte order mark on its own line, lines are still counted from the file's
+        // first.
+        let bom =
+            format!("\u{feff}\nsolid x\n{facet}facet normal 0 0 1\nouter loop\nvertex 0 0 nan\n");
+        let message = load_err(&write(&dir, "bom.stl", bom.as_bytes()));
+        assert!(
+            message.contains("line 12: `nan` is not a finite"),
+            "{message}"
+        );
+        // Several solids are read as one (the reader alone stopped at the first `endsolid`);
+        // anything else after an `endsolid` is an error.
+        let far = facet.replace("vertex 0 0 0", "vertex 0 0 7");
+        let two = format!("solid a\n{facet}endsolid a\n\nsolid b\n{far}endsolid b\n");
+        let mesh = load_mesh(&write(&dir, "two.stl", two.as_bytes())).unwrap();
+        assert_eq!(mesh.triangles.len(), 2);
+        assert_eq!(mesh.aabb().1[2], 7.0);
+        let junk = format!("solid a\n{facet}endsolid a\njunk\n");
+        let message = load_err(&write(&dir, "junk.stl", junk.as_bytes()));
+        assert!(
+            message.contains("line 10: expected `solid` or the end of the file: `junk`"),
+            "{message}"
+        );
     }
 
     #[test]
