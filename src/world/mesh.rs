@@ -1348,9 +1348,15 @@ fn obj_non_finite_line(bytes: &[u8]) -> Option<(usize, String)> {
             if words.next() != Some("v") {
                 return None;
             }
-            let values: Vec<f64> = words.map_while(|w| w.parse().ok()).collect();
-            let w = if values.len() == 4 { values[3] } else { 1.0 };
-            let bad = values.iter().take(3).any(|x| !(x / w).is_finite());
+            // Up to five numbers (x y z, then w, or a colour), without allocating per line.
+            let mut values = [0.0f64; 5];
+            let mut n = 0;
+            for x in words.map_while(|w| w.parse::<f64>().ok()).take(5) {
+                values[n] = x;
+                n += 1;
+            }
+            let w = if n == 4 { values[3] } else { 1.0 };
+            let bad = values[..n.min(3)].iter().any(|x| !(x / w).is_finite());
             bad.then(|| (number + 1, quote(line)))
         })
 }
