@@ -876,12 +876,9 @@ pub fn count_triangles(path: &Path) -> Option<usize> {
         "stl" => {
             let (declared, ascii) = stl_layout(&bytes);
             if ascii {
-                let facets = bytes.split(|&b| b == b'\n').filter(|line| {
-                    let mut words = line
-                        .split(|b| b.is_ascii_whitespace())
-                        .filter(|w| !w.is_empty());
-                    words.next() == Some(b"facet")
-                });
+                let facets = bytes
+                    .split(|&b| b == b'\n')
+                    .filter(|line| words(line).next() == Some(b"facet"));
                 Some(facets.count())
             } else {
                 declared.map(|n| n as usize)
@@ -891,13 +888,17 @@ pub fn count_triangles(path: &Path) -> Option<usize> {
     }
 }
 
+/// The words of a line of a text mesh file: its runs of bytes between ASCII whitespace.
+fn words(line: &[u8]) -> impl Iterator<Item = &[u8]> {
+    line.split(|b| b.is_ascii_whitespace())
+        .filter(|w| !w.is_empty())
+}
+
 /// The numbers of triangles (faces fanned) and vertices of OBJ bytes, counted line by line.
 fn obj_counts(bytes: &[u8]) -> (usize, usize) {
     let (mut triangles, mut vertices) = (0usize, 0usize);
     for line in bytes.split(|&b| b == b'\n') {
-        let mut tokens = line
-            .split(|b| b.is_ascii_whitespace())
-            .filter(|t| !t.is_empty());
+        let mut tokens = words(line);
         match tokens.next() {
             Some(b"f") => triangles += tokens.count().saturating_sub(2),
             Some(b"v") => vertices += 1,
@@ -957,13 +958,10 @@ fn parse_stl(path: &Path, bytes: &[u8]) -> Result<MeshData, MeshError> {
         // A file of several solids (`endsolid`, then `solid` again) is read whole: the lines
         // between them are dropped, and the last `endsolid` ends the one solid read.
         let mut normalised = b"solid mesh\n".to_vec();
-        let mut ended = false;
+        let (mut ended, mut any_end) = (false, false);
         for line in rest.split_inclusive(|&b| b == b'\n') {
-            let first = line
-                .split(|b| b.is_ascii_whitespace())
-                .find(|w| !w.is_empty());
-            match first {
-                Some(b"endsolid") => ended = true,
+            match words(line).next() {
+                Some(b"endsolid") => (ended, any_end) = (true, true),
                 Some(b"solid") if ended => ended = false,
                 None => {} // a blank line
                 _ => {
@@ -975,9 +973,7 @@ fn parse_stl(path: &Path, bytes: &[u8]) -> Result<MeshData, MeshError> {
                 }
             }
         }
-        if rest.split(|&b| b == b'\n').any(|l| {
-            l.split(|b| b.is_ascii_whitespace()).find(|w| !w.is_empty()) == Some(b"endsolid")
-        }) {
+        if any_end {
             normalised.extend_from_slice(b"endsolid mesh\n");
         }
         ("ASCII STL", Cow::Owned(normalised))
@@ -1313,10 +1309,7 @@ fn obj_bad_text_only_in_names(bytes: &[u8]) -> bool {
         .split(|&b| b == b'\n')
         .filter(|line| std::str::from_utf8(line).is_err())
         .all(|line| {
-            let mut words = line
-                .split(|b| b.is_ascii_whitespace())
-                .filter(|w| !w.is_empty());
-            let first = words.next().unwrap_or(b"");
+            let first = words(line).next().unwrap_or(b"");
             first.starts_with(b"#") || matches!(first, b"o" | b"g" | b"s" | b"usemtl" | b"mtllib")
         })
 }
@@ -1328,9 +1321,7 @@ fn obj_short_face(bytes: &[u8]) -> Option<(usize, String)> {
         .split(|&b| b == b'\n')
         .enumerate()
         .find_map(|(number, raw)| {
-            let mut words = raw
-                .split(|b| b.is_ascii_whitespace())
-                .filter(|w| !w.is_empty());
+            let mut words = words(raw);
             (words.next() == Some(b"f") && words.count() < 3)
                 .then(|| (number + 1, quote(&String::from_utf8_lossy(raw))))
         })
