@@ -198,6 +198,13 @@ pub fn check_dir_not_input(
     Ok(())
 }
 
+/// True when the outputs `a` and `b` would land in the same place: the same location once
+/// resolved ([`resolve`], for files not written yet), or the same existing file however spelt
+/// ([`same_file`], hard links included).
+pub fn same_place(a: &Path, b: &Path) -> bool {
+    resolve(a) == resolve(b) || same_file(a, b)
+}
+
 /// `path` made absolute with the symbolic links of its existing part resolved, and the `.`
 /// and `..` of the part that does not exist yet applied as the file system will: where a
 /// folder about to be created will lie.

@@ -73,7 +73,7 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         let same = |other: &Option<PathBuf>| {
             other
                 .as_ref()
-                .is_some_and(|o| kinsynth::io::resolve(o) == kinsynth::io::resolve(path))
+                .is_some_and(|o| kinsynth::io::same_place(o, path))
         };
         if same(&json) || same(&urdf.trajectories) {
             return Err(kinsynth::Error::invalid(
@@ -87,7 +87,7 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         kinsynth::io::check_output_dir(dir)?;
         if json
             .as_ref()
-            .is_some_and(|j| kinsynth::io::resolve(j) == kinsynth::io::resolve(dir))
+            .is_some_and(|j| kinsynth::io::same_place(j, dir))
         {
             return Err(kinsynth::Error::invalid(
                 "--trajectories",

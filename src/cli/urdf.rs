@@ -48,11 +48,10 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
     let given = srdf.is_some();
     let srdf = srdf.or_else(|| (!special).then(|| output.with_extension("srdf")));
     // The same file however spelt (`-o o.urdf --srdf ./o.urdf`).
-    let same = |a: &std::path::Path| {
-        kinsynth::io::resolve(a) == kinsynth::io::resolve(&output)
-            || kinsynth::io::same_file(a, &output)
-    };
-    if srdf.as_deref().is_some_and(same) {
+    if srdf
+        .as_deref()
+        .is_some_and(|p| kinsynth::io::same_place(p, &output))
+    {
         return Err(kinsynth::Error::invalid(
             "-o",
             output.display(),
