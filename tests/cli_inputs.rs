@@ -1703,3 +1703,26 @@ fn unusable_outputs_and_huge_counts_are_said_plainly() {
         &["--seeds = 1.8446744073709552e19", "from 1 to 1000"],
     );
 }
+
+/// `--islands 0` asks for at least one island, and `reach --tree` without `--json` (where the
+/// tree would go) is a command-line error.
+#[test]
+fn island_count_and_tree_without_report_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let cell = repo("examples/scenarios/paper-2d.toml");
+    let out = dir.path().join("run");
+    rejected(
+        &[
+            "optimize".as_ref(),
+            cell.as_os_str(),
+            "--islands".as_ref(),
+            "0".as_ref(),
+            "--out".as_ref(),
+            out.as_os_str(),
+        ],
+        &["--islands = 0: must be at least 1"],
+    );
+    let (code, stderr) = run(&["reach".as_ref(), cell.as_os_str(), "--tree".as_ref()]);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(stderr.contains("--json"), "{stderr}");
+}
