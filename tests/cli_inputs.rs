@@ -727,6 +727,30 @@ fn outputs_into_stdout_pipes_come_through_alone() {
         urdf.starts_with("<?xml") && urdf.trim_end().ends_with("</robot>"),
         "{urdf}"
     );
+    // A regular file under /dev (a tmpfs such as /dev/shm) gets its SRDF beside it.
+    if Path::new("/dev/shm").is_dir() {
+        let shm = PathBuf::from(format!(
+            "/dev/shm/kinsynth-test-{}.urdf",
+            std::process::id()
+        ));
+        let srdf = shm.with_extension("srdf");
+        let out = Command::new(BIN)
+            .args([
+                OsStr::new("urdf"),
+                d.as_os_str(),
+                "-o".as_ref(),
+                shm.as_os_str(),
+            ])
+            .output()
+            .unwrap();
+        let written = srdf.is_file();
+        let _ = (std::fs::remove_file(&shm), std::fs::remove_file(&srdf));
+        assert!(
+            out.status.success() && written,
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
     // stdout and the output both /dev/null: the messages stay on stdout (not on stderr).
     let out = Command::new(BIN)
         .args([

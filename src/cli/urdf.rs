@@ -38,12 +38,15 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
     let config = s
         .as_ref()
         .map_or_else(Default::default, |s| s.planner.self_collision.clone());
-    // Beside a regular file only: `/dev/null.srdf` or `/dev/stdout.srdf` is no place for it
-    // (stdout redirected to a file is still written through /dev/stdout).
+    // Beside a regular file only: `/dev/null.srdf` or `/dev/stdout.srdf` is no place for it.
+    // A standard stream redirected to a file is a regular file reached through /proc
+    // (`/dev/stdout` → `/proc/self/fd/1`): no SRDF beside that either. Other files under /dev
+    // (`/dev/shm/robot.urdf`) get theirs.
     let written = std::path::absolute(&output).unwrap_or_else(|_| output.clone());
+    let through_proc = written.starts_with("/proc")
+        || std::fs::read_link(&written).is_ok_and(|t| t.starts_with("/proc"));
     let special = std::fs::metadata(&output).is_ok_and(|m| !m.is_file() && !m.is_dir())
-        || written.starts_with("/dev")
-        || written.starts_with("/proc")
+        || through_proc
         || kinsynth::io::same_file(&output, std::path::Path::new("/dev/stdout"));
     let given = srdf.is_some();
     let srdf = srdf.or_else(|| (!special).then(|| output.with_extension("srdf")));
