@@ -30,6 +30,7 @@ use crate::limits::{within, MAX_ANGLE, MAX_LENGTH, MAX_SETTING};
 use crate::world::mesh::hull_of_points;
 use nalgebra::{IsometryMatrix3, Point3, Rotation3, Translation3, Vector3};
 use parry3d_f64::shape::SharedShape;
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 /// Distance (m) within which a capsule's ends count as a chain segment's ends, and a sphere's
@@ -441,8 +442,9 @@ pub fn resolve_mesh(
 /// `source="#id"` in a geometry names an element of the kind it expects, an accessor's stride
 /// is not 0, positions and normals are three floats per vertex within their array, and every
 /// vertex index names a position. Anything else is left to the reader. Returns an upper bound
-/// of the triangles the reader will build (exact for `<triangles>` and `<polylist>`).
-fn check_collada(text: &str) -> std::result::Result<u64, String> {
+/// of the triangles the reader will build (exact for `<triangles>` and `<polylist>`), with the
+/// geometries the scene places ([`collada_instances`]).
+fn check_collada(text: &str) -> std::result::Result<Collada, String> {
     /// Largest `<input offset>` of a primitive (real files use a handful of inputs).
     const MAX_OFFSET: u64 = 1024;
     let doc = roxmltree::Document::parse(text).map_err(|e| format!("not a readable mesh: {e}"))?;
@@ -488,7 +490,12 @@ fn check_collada(text: &str) -> std::result::Result<u64, String> {
         .children()
         .find(|n| n.has_tag_name("library_geometries"))
     else {
-        return Ok(0);
+        // Nothing to read (the caller says the file has no triangles).
+        return Ok(Collada {
+            triangles: 0,
+            instances: Vec::new(),
+            cut: Vec::new(),
+        });
     };
     let number = |n: roxmltree::Node, attr: &str| -> std::result::Result<u64, String> {
         match n.attribute(attr) {
@@ -503,7 +510,10 @@ fn check_collada(text: &str) -> std::result::Result<u64, String> {
     };
     let text_len = |n: roxmltree::Node| n.text().map_or(0, |t| t.trim().len()) as u64;
     let mut triangles = 0u64;
+    // Per geometry id, the triangles of its primitives.
+    let mut per_geometry: std::collections::HashMap<&str, u64> = Default::default();
     for n in geometries.descendants().filter(|n| n.is_element()) {
+        let before = triangles;
         let name = n.tag_name().name();
         if name.ends_with("_array") {
             let count = number(n, "count")?;
@@ -576,6 +586,11 @@ fn check_collada(text: &str) -> std::result::Result<u64, String> {
             // two characters of <p> at least).
             _ => indices / 2 / stride,
         });
+        let geometry = n.ancestors().find(|a| a.has_tag_name("geometry"));
+        if let Some(id) = geometry.and_then(|g| g.attribute("id")) {
+            let t = per_geometry.entry(id).or_insert(0);
+            *t = t.saturating_add(triangles - before);
+        }
     }
     // References inside the geometries resolve to the kind of element the reader expects,
     // accessors step forward, and positions and normals are three floats (the reader panics
@@ -711,7 +726,205 @@ fn check_collada(text: &str) -> std::result::Result<u64, String> {
             }
         }
     }
-    Ok(triangles)
+    let instances = collada_instances(&doc, &ids)?;
+    let placed = instances.iter().fold(0u64, |sum, (id, _)| {
+        sum.saturating_add(per_geometry.get(id.as_str()).copied().unwrap_or(0))
+    });
+    // The reader is given the file without its visual scenes: it then builds every geometry
+    // once, untransformed, and the instances place them.
+    let cut = doc
+        .root_element()
+        .children()
+        .filter(|n| n.has_tag_name("library_visual_scenes"))
+        .map(|n| n.range())
+        .collect();
+    Ok(Collada {
+        triangles: triangles.max(placed),
+        instances,
+        cut,
+    })
+}
+
+/// What [`check_collada`] finds in a COLLADA file.
+#[derive(Debug)]
+struct Collada {
+    /// Upper bound of the triangles the reader builds and the scene places.
+    triangles: u64,
+    /// The geometries placed by the scene: id and transform, one per instance.
+    instances: Vec<(String, nalgebra::Matrix4<f64>)>,
+    /// Byte ranges of the `<library_visual_scenes>` elements.
+    cut: Vec<Range<usize>>,
+}
+
+/// Most geometry instances a COLLADA file's scene may place.
+const MAX_COLLADA_INSTANCES: usize = 100_000;
+
+/// The geometries the scene of a COLLADA document places, as coal, MoveIt and tesseract take
+/// them from Assimp: from the visual scene that `<scene><instance_visual_scene>` names, every
+/// `<instance_geometry>` under its nodes (and under the nodes an `<instance_node>` names), once
+/// per instance, with the product of its nodes' transforms (`<matrix>`, `<translate>`,
+/// `<rotate>`, `<scale>`, composed in document order); neither the asset's unit nor its up axis
+/// (Assimp's root transform, which they drop).
+fn collada_instances(
+    doc: &roxmltree::Document,
+    ids: &std::collections::HashMap<&str, roxmltree::Node>,
+) -> std::result::Result<Vec<(String, nalgebra::Matrix4<f64>)>, String> {
+    use nalgebra::Matrix4;
+    let line = |n: roxmltree::Node| doc.text_pos_at(n.range().start).row;
+    let root = doc.root_element();
+    let scene = root
+        .children()
+        .find(|n| n.has_tag_name("scene"))
+        .and_then(|s| {
+            s.children()
+                .find(|c| c.has_tag_name("instance_visual_scene"))
+        })
+        .ok_or("no <scene> with an <instance_visual_scene>: the file places no geometry")?;
+    let url = scene.attribute("url").unwrap_or("");
+    let visual = url
+        .strip_prefix('#')
+        .and_then(|id| ids.get(id))
+        .filter(|n| n.has_tag_name("visual_scene"))
+        .ok_or_else(|| {
+            format!(
+                "line {}: <instance_visual_scene url=\"{}\">: names no <visual_scene>",
+                line(scene),
+                crate::error::shorten(url)
+            )
+        })?;
+    // The transform of one node: its transform elements multiplied in order.
+    let transform = |node: roxmltree::Node| -> std::result::Result<Matrix4<f64>, String> {
+        let mut m = Matrix4::identity();
+        for c in node.children().filter(|c| c.is_element()) {
+            let name = c.tag_name().name();
+            let wanted = match name {
+                "matrix" => 16,
+                "translate" | "scale" => 3,
+                "rotate" => 4,
+                "lookat" | "skew" => {
+                    return Err(format!(
+                        "line {}: <{name}> in a node: not supported (use <matrix>)",
+                        line(c)
+                    ))
+                }
+                _ => continue,
+            };
+            let text = c.text().unwrap_or("");
+            let values: Vec<f64> = text
+                .split_ascii_whitespace()
+                .map(|v| v.parse::<f64>())
+                .collect::<std::result::Result<_, _>>()
+                .ok()
+                .filter(|v: &Vec<f64>| v.len() == wanted && v.iter().all(|x| x.is_finite()))
+                .ok_or_else(|| {
+                    format!(
+                        "line {}: <{name}>{}</{name}>: needs {wanted} finite numbers",
+                        line(c),
+                        crate::error::shorten(text.trim())
+                    )
+                })?;
+            let v = &values;
+            let step = match name {
+                "matrix" => Matrix4::from_row_slice(v),
+                "translate" => Matrix4::new_translation(&Vector3::new(v[0], v[1], v[2])),
+                "scale" => Matrix4::new_nonuniform_scaling(&Vector3::new(v[0], v[1], v[2])),
+                _ => {
+                    // Assimp's rotation about the axis as written (not normalised), by
+                    // degrees.
+                    let (x, y, z) = (v[0], v[1], v[2]);
+                    let (s, c) = v[3].to_radians().sin_cos();
+                    let t = 1.0 - c;
+                    Matrix4::new(
+                        t * x * x + c,
+                        t * x * y - s * z,
+                        t * x * z + s * y,
+                        0.0,
+                        t * x * y + s * z,
+                        t * y * y + c,
+                        t * y * z - s * x,
+                        0.0,
+                        t * x * z - s * y,
+                        t * y * z + s * x,
+                        t * z * z + c,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        1.0,
+                    )
+                }
+            };
+            m *= step;
+        }
+        Ok(m)
+    };
+    let mut out = Vec::new();
+    // Depth-first over (node, transform of its parent, depth); the visual scene's own
+    // children first.
+    let mut stack: Vec<(roxmltree::Node, Matrix4<f64>, usize)> = visual
+        .children()
+        .filter(|c| c.has_tag_name("node"))
+        .map(|c| (c, Matrix4::identity(), 0))
+        .collect();
+    stack.reverse();
+    let mut visits = 0usize;
+    while let Some((node, parent, depth)) = stack.pop() {
+        visits += 1;
+        if visits > MAX_COLLADA_INSTANCES || depth > crate::limits::MAX_MESH_XML_DEPTH {
+            return Err(format!(
+                "the scene places more than {MAX_COLLADA_INSTANCES} nodes (or nests them too deep)"
+            ));
+        }
+        let m = parent * transform(node)?;
+        let mut children = Vec::new();
+        for c in node.children().filter(|c| c.is_element()) {
+            let name = c.tag_name().name();
+            match name {
+                "node" => children.push(c),
+                "instance_geometry" | "instance_node" | "instance_controller" => {
+                    let url = c.attribute("url").unwrap_or("");
+                    let kind = if name == "instance_node" {
+                        "node"
+                    } else if name == "instance_geometry" {
+                        "geometry"
+                    } else {
+                        return Err(format!(
+                            "line {}: <instance_controller>: a skinned mesh is not supported \
+                             (export it as plain geometry)",
+                            line(c)
+                        ));
+                    };
+                    let target = url
+                        .strip_prefix('#')
+                        .and_then(|id| ids.get(id))
+                        .filter(|n| n.has_tag_name(kind))
+                        .ok_or_else(|| {
+                            format!(
+                                "line {}: <{name} url=\"{}\">: names no <{kind}>",
+                                line(c),
+                                crate::error::shorten(url)
+                            )
+                        })?;
+                    if kind == "node" {
+                        children.push(*target);
+                    } else {
+                        if out.len() >= MAX_COLLADA_INSTANCES {
+                            return Err(format!(
+                                "the scene places more than {MAX_COLLADA_INSTANCES} geometries"
+                            ));
+                        }
+                        out.push((url[1..].to_string(), m));
+                    }
+                }
+                _ => {}
+            }
+        }
+        stack.extend(children.into_iter().rev().map(|c| (c, m, depth + 1)));
+    }
+    if out.is_empty() {
+        return Err("the scene places no geometry (no <instance_geometry> in its nodes)".into());
+    }
+    Ok(out)
 }
 
 /// Runs `f` and returns its value, or the panic's message (shortened) if it panicked, without
@@ -755,7 +968,11 @@ fn collada_corners(path: &Path) -> std::result::Result<Vec<(u32, [f64; 3])>, Str
     }
     let text = String::from_utf8_lossy(&bytes);
     crate::limits::check_xml_depth(&text, crate::limits::MAX_MESH_XML_DEPTH)?;
-    let triangles = check_collada(&text)?;
+    let Collada {
+        triangles,
+        instances,
+        cut,
+    } = check_collada(&text)?;
     let limit = crate::limits::MAX_MESH_TRIANGLES as u64;
     if triangles > limit {
         return Err(format!(
@@ -771,6 +988,22 @@ fn collada_corners(path: &Path) -> std::result::Result<Vec<(u32, [f64; 3])>, Str
             ),
         ))
     };
+    // The reader builds every geometry once, untransformed, from the file without its visual
+    // scenes; the scene's instances then place them ([`collada_instances`]).
+    let plain = match &text {
+        std::borrow::Cow::Borrowed(text) => {
+            let mut plain = String::with_capacity(text.len());
+            let mut at = 0;
+            for r in &cut {
+                plain.push_str(&text[at..r.start]);
+                at = r.end;
+            }
+            plain.push_str(&text[at..]);
+            Some(plain.into_bytes())
+        }
+        std::borrow::Cow::Owned(_) => None,
+    };
+    let bytes = plain.unwrap_or(bytes);
     // The COLLADA reader panics on some malformed files (a missing source, a short array)
     // instead of returning an error: such a panic is this file's error too.
     let scene = catch_quietly(|| {
@@ -785,8 +1018,14 @@ fn collada_corners(path: &Path) -> std::result::Result<Vec<(u32, [f64; 3])>, Str
         format!("not a readable mesh: the mesh reader failed on it{said}")
     })?
     .map_err(|e| format!("not a readable mesh: {e}"))?;
+    let meshes: std::collections::HashMap<&str, &mesh_loader::Mesh> =
+        scene.meshes.iter().map(|m| (m.name.as_str(), m)).collect();
     let mut corners = Vec::new();
-    for m in &scene.meshes {
+    for (id, transform) in &instances {
+        // A geometry of another kind than <mesh> builds nothing, as in Assimp.
+        let Some(m) = meshes.get(id.as_str()) else {
+            continue;
+        };
         for f in &m.faces {
             for &i in f {
                 let Some(v) = m.vertices.get(i as usize) else {
@@ -794,7 +1033,8 @@ fn collada_corners(path: &Path) -> std::result::Result<Vec<(u32, [f64; 3])>, Str
                         "a triangle refers to vertex {i}, which does not exist"
                     ));
                 };
-                corners.push((i, v.map(f64::from)));
+                let p = transform.transform_point(&Point3::from(v.map(f64::from)));
+                corners.push((i, [p.x, p.y, p.z]));
             }
         }
     }
@@ -1176,7 +1416,7 @@ mod tests {
     fn collada_triangles_are_counted_before_reading() {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/arm/link2.dae");
         let text = std::fs::read_to_string(&path).unwrap();
-        assert_eq!(check_collada(&text), Ok(28));
+        assert_eq!(check_collada(&text).map(|c| c.triangles), Ok(28));
         let start = text.find("<triangles").unwrap();
         let end = text.find("</triangles>").unwrap() + "</triangles>".len();
         // The same 28 triangles as quads and pentagons fanned: 7 polygons of 4 and 5 vertices.
@@ -1198,7 +1438,7 @@ mod tests {
             indices[..15].join(" ")
         );
         let edited = format!("{}{polylist}{}", &text[..start], &text[end..]);
-        assert_eq!(check_collada(&edited), Ok(2 + 3 + 4));
+        assert_eq!(check_collada(&edited).map(|c| c.triangles), Ok(2 + 3 + 4));
         // The asset's unit and up axis.
         for (from, to, says) in [
             (
@@ -1226,6 +1466,113 @@ mod tests {
             assert!(e.contains(says), "{e}");
         }
         assert!(check_collada(&text.replacen("meter=\"1\"", "meter=\"0,001\"", 1)).is_ok());
+    }
+
+    /// A COLLADA file is read as coal, MoveIt and tesseract read it: its `<unit meter>` and
+    /// `<up_axis>` are not applied, the transforms of its scene's nodes are, and a geometry is
+    /// there once per instance (also through `<instance_node>`); vertices are then scaled by the
+    /// URDF's `scale` alone. A file that places nothing, or places without end, is refused.
+    #[test]
+    fn collada_unit_and_up_axis_are_not_applied_but_node_transforms_are() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/arm/link2.dae");
+        let text = std::fs::read_to_string(&path).unwrap();
+        let dir = std::env::temp_dir().join(format!("kinsynth-unit-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let bounds = |name: &str, text: &str, scale: [f64; 3]| {
+            let file = dir.join(name);
+            std::fs::write(&file, text).unwrap();
+            let (hull, _) = load_hull(&file, scale).unwrap();
+            let points = hull.as_convex_polyhedron().unwrap().points().to_vec();
+            let mut lo = [f64::MAX; 3];
+            let mut hi = [f64::MIN; 3];
+            for p in points {
+                for k in 0..3 {
+                    lo[k] = lo[k].min(p[k]);
+                    hi[k] = hi[k].max(p[k]);
+                }
+            }
+            (lo, hi)
+        };
+        let close = |a: [f64; 3], b: [f64; 3]| a.iter().zip(&b).all(|(x, y)| (x - y).abs() < 1e-6);
+        let (lo, hi) = bounds("plain.dae", &text, [1.0; 3]);
+        assert!(
+            close(lo, [-0.09, -0.06, -0.05]) && close(hi, [0.09, 0.06, 0.45]),
+            "{lo:?} {hi:?}"
+        );
+        assert!(text.contains("meter=\"1\"") && text.contains("Z_UP"));
+        let centimetres = text
+            .replacen("meter=\"1\"", "meter=\"0.01\"", 1)
+            .replacen("Z_UP", "Y_UP", 1);
+        assert_eq!(bounds("cm.dae", &centimetres, [1.0; 3]), (lo, hi));
+        let (lo2, hi2) = bounds("cm2.dae", &centimetres, [2.0; 3]);
+        assert!(close(lo2, lo.map(|v| 2.0 * v)) && close(hi2, hi.map(|v| 2.0 * v)));
+        // A node's translation moves the vertices (as every reader does).
+        let node = "<node id=\"link2\" name=\"link2\" type=\"NODE\">";
+        assert!(text.contains(node));
+        let moved = centimetres.replacen(node, &format!("{node}<translate>1 2 3</translate>"), 1);
+        let (lo3, hi3) = bounds("moved.dae", &moved, [1.0; 3]);
+        assert!(
+            close(lo3, [0.91, 1.94, 2.95]) && close(hi3, [1.09, 2.06, 3.45]),
+            "{lo3:?}"
+        );
+        // A geometry placed twice (a second node, moved and turned a quarter about z) is
+        // there twice.
+        let end = text.find("</node>").unwrap() + "</node>".len();
+        let second = "<node id=\"copy\"><translate>1 0 0</translate><rotate>0 0 1 90</rotate>\
+                      <instance_geometry url=\"#link2-mesh\"/></node>";
+        let twice = format!("{}{second}{}", &text[..end], &text[end..]);
+        let (lo4, hi4) = bounds("twice.dae", &twice, [1.0; 3]);
+        assert!(
+            close(lo4, [-0.09, -0.09, -0.05]) && close(hi4, [1.06, 0.09, 0.45]),
+            "{lo4:?} {hi4:?}"
+        );
+        // A node of the library placed by <instance_node> under a moved node.
+        let start = text.find(node).unwrap();
+        let part = text[start..end].replacen("id=\"link2\"", "id=\"part\"", 1);
+        let holder =
+            "<node id=\"holder\"><translate>0 7 0</translate><instance_node url=\"#part\"/></node>";
+        let library = format!("<library_nodes>{part}</library_nodes><library_visual_scenes>");
+        let by_reference = format!("{}{holder}{}", &text[..start], &text[end..]).replacen(
+            "<library_visual_scenes>",
+            &library,
+            1,
+        );
+        let (lo5, hi5) = bounds("reference.dae", &by_reference, [1.0; 3]);
+        assert!(
+            close(lo5, [-0.09, 6.94, -0.05]) && close(hi5, [0.09, 7.06, 0.45]),
+            "{lo5:?}"
+        );
+        // What places nothing, or too much, is refused with what is wrong.
+        let refused = |name: &str, text: &str| {
+            let file = dir.join(name);
+            std::fs::write(&file, text).unwrap();
+            load_hull(&file, [1.0; 3]).unwrap_err()
+        };
+        let scene = text.find("<scene>").unwrap();
+        let scene_end = text.find("</scene>").unwrap() + "</scene>".len();
+        let no_scene = format!("{}{}", &text[..scene], &text[scene_end..]);
+        assert!(refused("no-scene.dae", &no_scene).contains("no <scene>"));
+        let unplaced = format!("{}{}", &text[..start], &text[end..]);
+        assert!(refused("unplaced.dae", &unplaced).contains("places no geometry"));
+        let looped = by_reference.replacen(
+            "<instance_geometry url=\"#link2-mesh\"/>",
+            "<instance_geometry url=\"#link2-mesh\"/><instance_node url=\"#part\"/>",
+            1,
+        );
+        assert!(refused("loop.dae", &looped).contains("more than 100000"));
+        let lookat = moved.replacen(
+            "<translate>",
+            "<lookat>0 0 0 1 0 0 0 0 1</lookat><translate>",
+            1,
+        );
+        assert!(refused("lookat.dae", &lookat).contains("<lookat> in a node: not supported"));
+        let short = moved.replacen("1 2 3", "1 2", 1);
+        assert!(refused("short.dae", &short)
+            .contains("<translate>1 2</translate>: needs 3 finite numbers"));
+        let nowhere = text.replacen("url=\"#link2-mesh\"", "url=\"#nothing\"", 1);
+        assert!(refused("nowhere.dae", &nowhere)
+            .contains("<instance_geometry url=\"#nothing\">: names no <geometry>"));
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
