@@ -867,18 +867,23 @@ fn collada_instances(
         .map(|c| (c, Matrix4::identity(), 0))
         .collect();
     stack.reverse();
-    let mut visits = 0usize;
+    // Nodes visited or waiting (counted when they are found, so the stack stays within the
+    // limit too).
+    let mut visits = stack.len();
+    let mut children = Vec::new();
     while let Some((node, parent, depth)) = stack.pop() {
-        visits += 1;
         if visits > MAX_COLLADA_INSTANCES || depth > crate::limits::MAX_MESH_XML_DEPTH {
             return Err(format!(
                 "the scene places more than {MAX_COLLADA_INSTANCES} nodes (or nests them too deep)"
             ));
         }
         let m = parent * transform(node)?;
-        let mut children = Vec::new();
+        children.clear();
         for c in node.children().filter(|c| c.is_element()) {
             let name = c.tag_name().name();
+            if children.len() + visits > MAX_COLLADA_INSTANCES {
+                break; // refused when the next node is taken
+            }
             match name {
                 "node" => children.push(c),
                 "instance_geometry" | "instance_node" | "instance_controller" => {
@@ -919,7 +924,8 @@ fn collada_instances(
                 _ => {}
             }
         }
-        stack.extend(children.into_iter().rev().map(|c| (c, m, depth + 1)));
+        visits += children.len();
+        stack.extend(children.drain(..).rev().map(|c| (c, m, depth + 1)));
     }
     if out.is_empty() {
         return Err("the scene places no geometry (no <instance_geometry> in its nodes)".into());
