@@ -1566,6 +1566,20 @@ mod tests {
             1,
         );
         assert!(refused("loop.dae", &looped).contains("more than 100000"));
+        // A node of 200,000 references to another is refused at the limit.
+        let wide = format!(
+            "<library_nodes><node id=\"wide\">{}</node><node id=\"leaf\"/></library_nodes>\
+             <library_visual_scenes>",
+            "<instance_node url=\"#leaf\"/>".repeat(200_000)
+        );
+        let wide = text
+            .replacen(
+                "<instance_geometry url=\"#link2-mesh\"/>",
+                "<instance_geometry url=\"#link2-mesh\"/><instance_node url=\"#wide\"/>",
+                1,
+            )
+            .replacen("<library_visual_scenes>", &wide, 1);
+        assert!(refused("wide.dae", &wide).contains("more than 100000 nodes"));
         let lookat = moved.replacen(
             "<translate>",
             "<lookat>0 0 0 1 0 0 0 0 1</lookat><translate>",
