@@ -448,43 +448,8 @@ fn check_collada(text: &str) -> std::result::Result<Collada, String> {
     /// Largest `<input offset>` of a primitive (real files use a handful of inputs).
     const MAX_OFFSET: u64 = 1024;
     let doc = roxmltree::Document::parse(text).map_err(|e| format!("not a readable mesh: {e}"))?;
-    // The asset's unit scales every vertex (a negative one would mirror the body, zero collapse
-    // it); its up axis is one of the three the format names.
-    for n in doc
-        .root_element()
-        .children()
-        .filter(|n| n.has_tag_name("asset"))
-    {
-        for c in n.children().filter(|c| c.is_element()) {
-            let line = || doc.text_pos_at(c.range().start).row;
-            match c.tag_name().name() {
-                "unit" => {
-                    let Some(v) = c.attribute("meter") else {
-                        continue;
-                    };
-                    let meter = v.trim().replace(',', ".").parse::<f32>();
-                    if !meter.is_ok_and(|m| m.is_finite() && m > 0.0) {
-                        return Err(format!(
-                            "line {}: <unit meter=\"{}\">: must be a positive number (metres per unit)",
-                            line(),
-                            crate::error::shorten(v)
-                        ));
-                    }
-                }
-                "up_axis" => {
-                    let axis = c.text().unwrap_or("").trim();
-                    if !matches!(axis, "X_UP" | "Y_UP" | "Z_UP") {
-                        return Err(format!(
-                            "line {}: <up_axis>{}</up_axis>: must be X_UP, Y_UP or Z_UP",
-                            line(),
-                            crate::error::shorten(axis)
-                        ));
-                    }
-                }
-                _ => {}
-            }
-        }
-    }
+    // The asset's unit and up axis are not applied (see `collada_instances`), so they are not
+    // checked either (the reader needs the unit to be a number and says so).
     let Some(geometries) = doc
         .root_element()
         .children()
@@ -664,6 +629,19 @@ fn check_collada(text: &str) -> std::result::Result<Collada, String> {
             if params.len() < 3 || !floats || stride < 3 {
                 return Err(bad());
             }
+            // The reader takes the first three values of each vertex as X, Y, Z, where the
+            // format (and Assimp) reads the params by name from the accessor's offset.
+            let names: Vec<_> = params[..3].iter().map(|p| p.attribute("name")).collect();
+            let offset = number(accessor, "offset")?;
+            if semantic == "POSITION" && (offset != 0 || names != [Some("X"), Some("Y"), Some("Z")])
+            {
+                return Err(format!(
+                    "<source id=\"{}\"> (POSITION): its accessor must read X, Y, Z first: \
+                     offset 0 and params named X, Y, Z in that order (other layouts are not \
+                     supported)",
+                    crate::error::shorten(id)
+                ));
+            }
             let count = number(accessor, "count")?;
             let values = array
                 .text()
@@ -792,7 +770,8 @@ fn collada_instances(
                 crate::error::shorten(url)
             )
         })?;
-    // The transform of one node: its transform elements multiplied in order.
+    // The transform of one node: its transform elements multiplied in order, as Assimp
+    // composes them (a `<skew>` is ignored, as Assimp ignores it).
     let transform = |node: roxmltree::Node| -> std::result::Result<Matrix4<f64>, String> {
         let mut m = Matrix4::identity();
         for c in node.children().filter(|c| c.is_element()) {
@@ -801,15 +780,15 @@ fn collada_instances(
                 "matrix" => 16,
                 "translate" | "scale" => 3,
                 "rotate" => 4,
-                "lookat" | "skew" => {
-                    return Err(format!(
-                        "line {}: <{name}> in a node: not supported (use <matrix>)",
-                        line(c)
-                    ))
-                }
+                "lookat" => 9,
                 _ => continue,
             };
-            let text = c.text().unwrap_or("");
+            // The element's first text (a comment before the numbers is skipped).
+            let text = c
+                .children()
+                .find(|t| t.is_text())
+                .and_then(|t| t.text())
+                .unwrap_or("");
             let values: Vec<f64> = text
                 .split_ascii_whitespace()
                 .map(|v| v.parse::<f64>())
@@ -828,6 +807,26 @@ fn collada_instances(
                 "matrix" => Matrix4::from_row_slice(v),
                 "translate" => Matrix4::new_translation(&Vector3::new(v[0], v[1], v[2])),
                 "scale" => Matrix4::new_nonuniform_scaling(&Vector3::new(v[0], v[1], v[2])),
+                "lookat" => {
+                    // Assimp's: the eye at the first point looking at the second, its y
+                    // axis the up vector as given, its x axis their cross product.
+                    let eye = Vector3::new(v[0], v[1], v[2]);
+                    let unit = |x: Vector3<f64>| {
+                        let n = x.norm();
+                        if n > 0.0 {
+                            x / n
+                        } else {
+                            x
+                        }
+                    };
+                    let dir = unit(Vector3::new(v[3], v[4], v[5]) - eye);
+                    let up = unit(Vector3::new(v[6], v[7], v[8]));
+                    let right = unit(dir.cross(&up));
+                    Matrix4::new(
+                        right.x, up.x, -dir.x, eye.x, right.y, up.y, -dir.y, eye.y, right.z, up.z,
+                        -dir.z, eye.z, 0.0, 0.0, 0.0, 1.0,
+                    )
+                }
                 _ => {
                     // Assimp's rotation about the axis as written (not normalised), by
                     // degrees.
@@ -858,6 +857,52 @@ fn collada_instances(
         }
         Ok(m)
     };
+    // The node an `<instance_node url="#x">` places, found as Assimp finds it: among the top
+    // nodes of the `<library_nodes>` and the visual scenes by id (the last of a repeated id),
+    // else the first node of the placed visual scene (depth first) whose name or id is `x`;
+    // none (the instance is dropped) otherwise.
+    let mut library: std::collections::HashMap<&str, roxmltree::Node> = Default::default();
+    for lib in root.children() {
+        let top = if lib.has_tag_name("library_nodes") {
+            "node"
+        } else if lib.has_tag_name("library_visual_scenes") {
+            "visual_scene"
+        } else {
+            continue;
+        };
+        for n in lib.children().filter(|n| n.has_tag_name(top)) {
+            library.insert(n.attribute("id").unwrap_or(""), n);
+        }
+    }
+    // The placed visual scene's nodes (itself, then its nodes and theirs, depth first) by
+    // name and by id, the first of each.
+    let mut by_name: std::collections::HashMap<&str, roxmltree::Node> = Default::default();
+    let mut walk = vec![*visual];
+    while let Some(n) = walk.pop() {
+        for key in [n.attribute("name"), n.attribute("id")]
+            .into_iter()
+            .flatten()
+        {
+            by_name.entry(key).or_insert(n);
+        }
+        let inner = n.children().filter(|c| c.has_tag_name("node"));
+        let at = walk.len();
+        walk.extend(inner);
+        walk[at..].reverse();
+    }
+    let resolve = |x: &str| library.get(x).or_else(|| by_name.get(x)).copied();
+    // Assimp would place an instance outside every node with the root transform it drops
+    // elsewhere (the unit and up axis): the format puts instances in nodes, and so must a file.
+    if let Some(c) = visual
+        .children()
+        .find(|c| c.tag_name().name().starts_with("instance_"))
+    {
+        return Err(format!(
+            "line {}: <{}> directly in the <visual_scene>: instances belong in a <node>",
+            line(c),
+            c.tag_name().name()
+        ));
+    }
     let mut out = Vec::new();
     // Depth-first over (node, transform of its parent, depth); the visual scene's own
     // children first.
@@ -880,46 +925,37 @@ fn collada_instances(
         let m = parent * transform(node)?;
         children.clear();
         for c in node.children().filter(|c| c.is_element()) {
-            let name = c.tag_name().name();
             if children.len() + visits > MAX_COLLADA_INSTANCES {
                 break; // refused when the next node is taken
             }
+            let name = c.tag_name().name();
+            let url = || {
+                let url = c.attribute("url").unwrap_or("");
+                url.strip_prefix('#').ok_or_else(|| {
+                    format!(
+                        "line {}: <{name} url=\"{}\">: not a reference within the file",
+                        line(c),
+                        crate::error::shorten(url)
+                    )
+                })
+            };
             match name {
                 "node" => children.push(c),
-                "instance_geometry" | "instance_node" | "instance_controller" => {
-                    let url = c.attribute("url").unwrap_or("");
-                    let kind = if name == "instance_node" {
-                        "node"
-                    } else if name == "instance_geometry" {
-                        "geometry"
-                    } else {
+                "instance_node" => children.extend(resolve(url()?)),
+                "instance_geometry" => {
+                    if out.len() >= MAX_COLLADA_INSTANCES {
                         return Err(format!(
-                            "line {}: <instance_controller>: a skinned mesh is not supported \
-                             (export it as plain geometry)",
-                            line(c)
+                            "the scene places more than {MAX_COLLADA_INSTANCES} geometries"
                         ));
-                    };
-                    let target = url
-                        .strip_prefix('#')
-                        .and_then(|id| ids.get(id))
-                        .filter(|n| n.has_tag_name(kind))
-                        .ok_or_else(|| {
-                            format!(
-                                "line {}: <{name} url=\"{}\">: names no <{kind}>",
-                                line(c),
-                                crate::error::shorten(url)
-                            )
-                        })?;
-                    if kind == "node" {
-                        children.push(*target);
-                    } else {
-                        if out.len() >= MAX_COLLADA_INSTANCES {
-                            return Err(format!(
-                                "the scene places more than {MAX_COLLADA_INSTANCES} geometries"
-                            ));
-                        }
-                        out.push((url[1..].to_string(), m));
                     }
+                    out.push((url()?.to_string(), m));
+                }
+                "instance_controller" => {
+                    return Err(format!(
+                        "line {}: <instance_controller>: a skinned mesh is not supported \
+                         (export it as plain geometry)",
+                        line(c)
+                    ))
                 }
                 _ => {}
             }
@@ -1028,7 +1064,8 @@ fn collada_corners(path: &Path) -> std::result::Result<Vec<(u32, [f64; 3])>, Str
         scene.meshes.iter().map(|m| (m.name.as_str(), m)).collect();
     let mut corners = Vec::new();
     for (id, transform) in &instances {
-        // A geometry of another kind than <mesh> builds nothing, as in Assimp.
+        // A geometry of another kind than <mesh>, or an id that names no geometry, builds
+        // nothing, as in Assimp.
         let Some(m) = meshes.get(id.as_str()) else {
             continue;
         };
@@ -1039,7 +1076,9 @@ fn collada_corners(path: &Path) -> std::result::Result<Vec<(u32, [f64; 3])>, Str
                         "a triangle refers to vertex {i}, which does not exist"
                     ));
                 };
-                let p = transform.transform_point(&Point3::from(v.map(f64::from)));
+                // As Assimp applies a node transform to a vertex: its bottom row is not used.
+                let v = Vector3::from(v.map(f64::from));
+                let p = transform.fixed_view::<3, 3>(0, 0) * v + transform.fixed_view::<3, 1>(0, 3);
                 corners.push((i, [p.x, p.y, p.z]));
             }
         }
@@ -1445,33 +1484,36 @@ mod tests {
         );
         let edited = format!("{}{polylist}{}", &text[..start], &text[end..]);
         assert_eq!(check_collada(&edited).map(|c| c.triangles), Ok(2 + 3 + 4));
-        // The asset's unit and up axis.
-        for (from, to, says) in [
-            (
-                "meter=\"1\"",
-                "meter=\"-1\"",
-                "<unit meter=\"-1\">: must be a positive number",
-            ),
-            (
-                "meter=\"1\"",
-                "meter=\"0\"",
-                "<unit meter=\"0\">: must be a positive number",
-            ),
-            (
-                "Z_UP",
-                "W_UP",
-                "<up_axis>W_UP</up_axis>: must be X_UP, Y_UP or Z_UP",
-            ),
+        // The asset's unit and up axis are not applied, so any value is read (as coal reads
+        // them); a position accessor that does not read X, Y, Z first is refused.
+        for (from, to) in [
+            ("meter=\"1\"", "meter=\"-1\""),
+            ("meter=\"1\"", "meter=\"0\""),
+            ("meter=\"1\"", "meter=\"1e40\""),
+            ("meter=\"1\"", "meter=\"0,001\""),
+            ("Z_UP", "W_UP"),
         ] {
             assert!(text.contains(from), "{from}");
-            let e = check_collada(&text.replacen(from, to, 1)).unwrap_err();
-            assert!(
-                e.starts_with("line 7: ") || e.starts_with("line 8: "),
-                "{e}"
-            );
-            assert!(e.contains(says), "{e}");
+            assert!(check_collada(&text.replacen(from, to, 1)).is_ok(), "{to}");
         }
-        assert!(check_collada(&text.replacen("meter=\"1\"", "meter=\"0,001\"", 1)).is_ok());
+        let xyz =
+            "<param name=\"X\" type=\"float\"/>\n              <param name=\"Y\" type=\"float\"/>";
+        assert!(text.contains(xyz));
+        let yx = xyz
+            .replace("\"X\"", "\"T\"")
+            .replace("\"Y\"", "\"X\"")
+            .replace("\"T\"", "\"Y\"");
+        let e = check_collada(&text.replacen(xyz, &yx, 1)).unwrap_err();
+        assert!(
+            e.contains("(POSITION): its accessor must read X, Y, Z first"),
+            "{e}"
+        );
+        let shifted = text.replacen("<accessor source", "<accessor offset=\"1\" source", 1);
+        let e = check_collada(&shifted).unwrap_err();
+        assert!(
+            e.contains("(POSITION): its accessor must read X, Y, Z first"),
+            "{e}"
+        );
     }
 
     /// A COLLADA file is read as coal, MoveIt and tesseract read it: its `<unit meter>` and
@@ -1580,18 +1622,53 @@ mod tests {
             )
             .replacen("<library_visual_scenes>", &wide, 1);
         assert!(refused("wide.dae", &wide).contains("more than 100000 nodes"));
+        // As Assimp composes a node: <lookat> (eye, target, up), <skew> ignored, a comment
+        // before the numbers skipped, a <matrix>'s bottom row not used on the vertices.
         let lookat = moved.replacen(
-            "<translate>",
-            "<lookat>0 0 0 1 0 0 0 0 1</lookat><translate>",
+            "<translate>1 2 3</translate>",
+            "<lookat>1 2 3 1 2 2 0 1 0</lookat>",
             1,
         );
-        assert!(refused("lookat.dae", &lookat).contains("<lookat> in a node: not supported"));
+        assert_eq!(bounds("lookat.dae", &lookat, [1.0; 3]), (lo3, hi3));
+        let skew = moved.replacen("<translate>", "<skew>45 0 1 0 1 0 0</skew><translate>", 1);
+        assert_eq!(bounds("skew.dae", &skew, [1.0; 3]), (lo3, hi3));
+        let comment = moved.replacen("<translate>", "<translate><!-- metres -->", 1);
+        assert_eq!(bounds("comment.dae", &comment, [1.0; 3]), (lo3, hi3));
+        let matrix = moved.replacen(
+            "<translate>1 2 3</translate>",
+            "<matrix>1 0 0 1 0 1 0 2 0 0 1 3 0 0 0 2</matrix>",
+            1,
+        );
+        assert_eq!(bounds("matrix.dae", &matrix, [1.0; 3]), (lo3, hi3));
+        // An <instance_node> names a library node by id, else a node of the scene by name.
+        let holder = "<node id=\"holder\"><translate>0 7 0</translate>\
+                      <instance_node url=\"#part\"/></node>";
+        let by_name = format!("{}{holder}{}", &text[..end], &text[end..]).replacen(
+            "id=\"link2\" name=\"link2\"",
+            "id=\"link2\" name=\"part\"",
+            1,
+        );
+        let (lo7, hi7) = bounds("by-name.dae", &by_name, [1.0; 3]);
+        assert!(
+            close(lo7, lo) && close(hi7, [0.09, 7.06, 0.45]),
+            "{lo7:?} {hi7:?}"
+        );
+        let outside = text.replacen(
+            "<node id=\"link2\"",
+            "<instance_geometry url=\"#link2-mesh\"/><node id=\"link2\"",
+            1,
+        );
+        assert!(refused("outside.dae", &outside).contains("directly in the <visual_scene>"));
         let short = moved.replacen("1 2 3", "1 2", 1);
         assert!(refused("short.dae", &short)
             .contains("<translate>1 2</translate>: needs 3 finite numbers"));
-        let nowhere = text.replacen("url=\"#link2-mesh\"", "url=\"#nothing\"", 1);
-        assert!(refused("nowhere.dae", &nowhere)
-            .contains("<instance_geometry url=\"#nothing\">: names no <geometry>"));
+        // An instance of no geometry places nothing (as in Assimp).
+        let nowhere = twice.replacen("url=\"#link2-mesh\"", "url=\"#nothing\"", 1);
+        let (lo6, hi6) = bounds("nowhere.dae", &nowhere, [1.0; 3]);
+        assert!(
+            close(lo6, [0.94, -0.09, -0.05]) && close(hi6, [1.06, 0.09, 0.45]),
+            "{lo6:?}"
+        );
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
