@@ -943,7 +943,13 @@ fn mesh_elements_share_one_hull_of_distinct_points() {
     let sphere = dir.path().join("sphere.stl");
     uv_sphere_stl(&sphere, 0.02, 140);
     let (hull, points) = load_hull(&sphere, [1.0, 1.0, 1.0]).unwrap();
-    assert_eq!(points, 3 * 140 * 70 * 2, "points read, three per triangle");
+    // The 140 triangles at the north pole have two corners there: lines, dropped (as by
+    // Assimp-based readers); at the south pole sin π is not exactly 0, so its corners differ.
+    assert_eq!(
+        points,
+        3 * (140 * 70 * 2 - 140),
+        "points read, three per triangle"
+    );
     let kept = hull.as_convex_polyhedron().unwrap().points().len();
     assert!(
         kept <= 140 * 69 + 2,

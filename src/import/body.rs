@@ -1070,12 +1070,18 @@ fn collada_corners(path: &Path) -> std::result::Result<Vec<(u32, [f64; 3])>, Str
             continue;
         };
         for f in &m.faces {
+            let corner = |i: u32| {
+                m.vertices
+                    .get(i as usize)
+                    .ok_or_else(|| format!("a triangle refers to vertex {i}, which does not exist"))
+            };
+            let [a, b, c] = [corner(f[0])?, corner(f[1])?, corner(f[2])?];
+            // Two equal corners: a line, which Assimp drops (before the node transforms).
+            if a == b || b == c || a == c {
+                continue;
+            }
             for &i in f {
-                let Some(v) = m.vertices.get(i as usize) else {
-                    return Err(format!(
-                        "a triangle refers to vertex {i}, which does not exist"
-                    ));
-                };
+                let v = corner(i)?;
                 // As Assimp applies a node transform to a vertex: its bottom row is not used.
                 let v = Vector3::from(v.map(f64::from));
                 let p = transform.fixed_view::<3, 3>(0, 0) * v + transform.fixed_view::<3, 1>(0, 3);
@@ -1116,10 +1122,14 @@ pub fn load_hull(
             let prefix = format!("{}: ", path.display());
             said.strip_prefix(&prefix).unwrap_or(&said).to_string()
         })?;
+        // A triangle with two equal corners is a line, which Assimp-based readers (coal,
+        // MoveIt) drop: so is it here, so that a stray vertex of one does not grow the hull.
+        let at = |i: u32| mesh.vertices[i as usize];
         mesh.triangles
             .iter()
+            .filter(|t| at(t[0]) != at(t[1]) && at(t[1]) != at(t[2]) && at(t[0]) != at(t[2]))
             .flatten()
-            .map(|&i| (i, mesh.vertices[i as usize]))
+            .map(|&i| (i, at(i)))
             .collect()
     };
     let mut points: Vec<[f64; 3]> = Vec::with_capacity(corners.len());
@@ -1670,6 +1680,30 @@ mod tests {
             "{lo6:?}"
         );
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A triangle with two equal corners is a line, which Assimp-based readers (coal, MoveIt)
+    /// drop: its stray vertex does not grow the hull.
+    #[test]
+    fn a_triangle_with_two_equal_corners_does_not_grow_the_hull() {
+        let dir = tempfile::tempdir().unwrap();
+        let tetra =
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 5 5 5\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+        let top = |text: &str| {
+            let file = dir.path().join("m.obj");
+            std::fs::write(&file, text).unwrap();
+            let (hull, points) = load_hull(&file, [1.0; 3]).unwrap();
+            let poly = hull.as_convex_polyhedron().unwrap().points().to_vec();
+            let top = poly
+                .iter()
+                .map(|p| p.x.max(p.y).max(p.z))
+                .fold(f64::MIN, f64::max);
+            (top, points)
+        };
+        assert_eq!(top(tetra), (1.0, 12));
+        assert_eq!(top(&format!("{tetra}f 1 5 5\n")), (1.0, 12));
+        // A collinear triangle of three distinct corners is kept, as by Assimp.
+        assert_eq!(top(&format!("{tetra}v 2 0 0\nf 1 2 6\n")).0, 2.0);
     }
 
     #[test]

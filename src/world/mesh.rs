@@ -1222,6 +1222,19 @@ fn parse_obj(path: &Path, bytes: &[u8]) -> Result<MeshData, MeshError> {
     } else {
         bytes
     };
+    // What Assimp-based readers (coal, MoveIt) read otherwise is refused; polylines and points
+    // are dropped, and comments after geometry, before tobj reads the file.
+    let prepared: Vec<u8>;
+    let bytes = match obj_prepare(bytes) {
+        Err((line, text, why)) => {
+            return Err(parse_error(format!("line {line}: {why}: `{text}`")));
+        }
+        Ok(Some(rewritten)) => {
+            prepared = rewritten;
+            &prepared[..]
+        }
+        Ok(None) => bytes,
+    };
     // Count triangles and vertices before tobj builds them, so a small file of long polygons
     // cannot expand into gigabytes.
     let (triangles, vertices) = obj_counts(bytes);
@@ -1299,6 +1312,69 @@ fn parse_obj(path: &Path, bytes: &[u8]) -> Result<MeshData, MeshError> {
         )));
     }
     Ok(mesh)
+}
+
+/// The OBJ `bytes` as tobj is given them, or the first line that Assimp-based readers (coal,
+/// MoveIt, so the independent checkers of a plan) read otherwise than tobj, with its text and
+/// why. Refused: a geometry line indented by spaces or tabs (Assimp skips it), a vertex
+/// coordinate written with a bare leading dot such as `.5` (Assimp drops the vertex), a
+/// comment ending in a backslash (Assimp joins the next line to it). Rewritten, when present
+/// (`Some`; lines keep their numbers): `l` and `p` lines are emptied (tobj would fill a
+/// polyline of three or more points as a polygon; Assimp drops lines and points, as collision
+/// geometry must), and a `#` comment after the data of a `v`, `vt`, `vn` or `f` line is cut
+/// (tobj cannot read it; Assimp skips it).
+type ObjRefusal = (usize, String, &'static str);
+fn obj_prepare(bytes: &[u8]) -> Result<Option<Vec<u8>>, ObjRefusal> {
+    const GEOMETRY: [&[u8]; 6] = [b"v", b"vt", b"vn", b"f", b"l", b"p"];
+    let refuse = |number: usize, raw: &[u8], why: &'static str| {
+        Err((number + 1, quote(&String::from_utf8_lossy(raw)), why))
+    };
+    let mut rewrite = false;
+    for (number, raw) in bytes.split(|&b| b == b'\n').enumerate() {
+        let first = words(raw).next().unwrap_or(b"");
+        let geometry = GEOMETRY.contains(&first);
+        if geometry && matches!(raw.first(), Some(b' ' | b'\t')) {
+            return refuse(
+                number,
+                raw,
+                "an indented line, which Assimp-based readers (coal, MoveIt) skip: remove the leading spaces",
+            );
+        }
+        if first == b"v" && words(raw).skip(1).any(|w| w.starts_with(b".")) {
+            return refuse(
+                number,
+                raw,
+                "a coordinate written with a bare leading dot, whose vertex Assimp-based readers (coal, MoveIt) drop: write 0.5 for .5",
+            );
+        }
+        if first.starts_with(b"#") && raw.trim_ascii_end().ends_with(b"\\") {
+            return refuse(
+                number,
+                raw,
+                "a comment ending in a backslash, to which Assimp-based readers (coal, MoveIt) join the next line: remove the backslash",
+            );
+        }
+        rewrite |= matches!(first, b"l" | b"p") || (geometry && raw.contains(&b'#'));
+    }
+    if !rewrite {
+        return Ok(None);
+    }
+    let mut out = Vec::with_capacity(bytes.len());
+    for (number, raw) in bytes.split(|&b| b == b'\n').enumerate() {
+        if number > 0 {
+            out.push(b'\n');
+        }
+        let first = words(raw).next().unwrap_or(b"");
+        if matches!(first, b"l" | b"p") {
+            continue;
+        }
+        let keep = match raw.iter().position(|&b| b == b'#') {
+            Some(cut) if GEOMETRY.contains(&first) => &raw[..cut],
+            _ => raw,
+        };
+        out.extend_from_slice(keep);
+    }
+    Ok(Some(out))
 }
 
 /// True when every line of the OBJ `bytes` that is not valid UTF-8 is a comment or names
@@ -1896,6 +1972,45 @@ f -3 -2 -1
 
     /// A file tobj refuses is named with the line that breaks its rule, quoted; so is a
     /// coordinate tobj reads as not finite.
+    /// OBJ lines that Assimp-based readers (coal, MoveIt) read otherwise than tobj: polylines
+    /// and points are dropped and comments after data cut (as Assimp does); indented geometry
+    /// lines, bare leading dots and comments ending in a backslash are refused with their line.
+    #[test]
+    fn obj_is_read_as_assimp_based_readers_read_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let v4 = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 5 5 5\n";
+        let read = |text: String| load_mesh(&write(&dir, "a.obj", text.as_bytes()));
+        let mesh = read(format!("{v4}l 1 2 4\np 1 2 4\nf 1 2 3\n")).unwrap();
+        assert_eq!(mesh.triangles.len(), 1, "a polyline is no face");
+        assert_eq!(mesh.aabb().1, [1.0, 1.0, 0.0]);
+        let mesh = read(format!("{v4}v 0 0 1 # apex\nf 1 2 5 # side\n")).unwrap();
+        assert_eq!(mesh.triangles.len(), 1);
+        assert_eq!(mesh.aabb().1, [1.0, 0.0, 1.0]);
+        assert!(read(format!("{v4}v 0 0 -.5\nf 1 2 5\n")).is_ok());
+        for (text, expected) in [
+            (format!("{v4}  f 1 2 3\n"), "line 5: an indented line"),
+            (
+                format!("{v4}\tv 0 0 1\nf 1 2 5\n"),
+                "line 5: an indented line",
+            ),
+            (
+                format!("{v4}v 0 0 .5\nf 1 2 5\n"),
+                "line 5: a coordinate written with a bare leading dot",
+            ),
+            (
+                format!("# apex \\\n{v4}f 1 2 3\n"),
+                "line 1: a comment ending in a backslash",
+            ),
+        ] {
+            let message = read(text.clone()).unwrap_err().to_string();
+            assert!(message.contains(expected), "{text:?}: {message}");
+            assert!(
+                message.contains("Assimp-based readers (coal, MoveIt)"),
+                "{message}"
+            );
+        }
+    }
+
     #[test]
     fn obj_errors_name_the_line() {
         let dir = tempfile::tempdir().unwrap();
