@@ -1321,8 +1321,9 @@ fn parse_obj(path: &Path, bytes: &[u8]) -> Result<MeshData, MeshError> {
 /// comment ending in a backslash (Assimp joins the next line to it). Rewritten, when present
 /// (`Some`; lines keep their numbers): `l` and `p` lines are emptied (tobj would fill a
 /// polyline of three or more points as a polygon; Assimp drops lines and points, as collision
-/// geometry must), and a `#` comment after the data of a `v`, `vt`, `vn` or `f` line is cut
-/// (tobj cannot read it; Assimp skips it).
+/// geometry must), a `#` comment after the data of a `v`, `vt`, `vn` or `f` line is cut
+/// (tobj cannot read it; Assimp skips it), and a vertex colour is dropped (tobj refuses colours
+/// on some vertices only; Assimp reads them; neither is geometry).
 type ObjRefusal = (usize, String, &'static str);
 fn obj_prepare(bytes: &[u8]) -> Result<Option<Vec<u8>>, ObjRefusal> {
     const GEOMETRY: [&[u8]; 6] = [b"v", b"vt", b"vn", b"f", b"l", b"p"];
@@ -1354,7 +1355,9 @@ fn obj_prepare(bytes: &[u8]) -> Result<Option<Vec<u8>>, ObjRefusal> {
                 "a comment ending in a backslash, to which Assimp-based readers (coal, MoveIt) join the next line: remove the backslash",
             );
         }
-        rewrite |= matches!(first, b"l" | b"p") || (geometry && raw.contains(&b'#'));
+        rewrite |= matches!(first, b"l" | b"p")
+            || (geometry && raw.contains(&b'#'))
+            || (first == b"v" && obj_coloured(raw));
     }
     if !rewrite {
         return Ok(None);
@@ -1372,9 +1375,24 @@ fn obj_prepare(bytes: &[u8]) -> Result<Option<Vec<u8>>, ObjRefusal> {
             Some(cut) if GEOMETRY.contains(&first) => &raw[..cut],
             _ => raw,
         };
-        out.extend_from_slice(keep);
+        if first == b"v" && obj_coloured(keep) {
+            // The position alone: tobj refuses colours on some vertices and not others.
+            for w in words(keep).take(4) {
+                out.extend_from_slice(w);
+                out.push(b' ');
+            }
+        } else {
+            out.extend_from_slice(keep);
+        }
     }
     Ok(Some(out))
+}
+
+/// True when the OBJ `v` line `raw` (its comment cut) holds a colour: six numbers, a position
+/// and red, green, blue (as Assimp reads six; tobj too, but only when every vertex has one).
+fn obj_coloured(raw: &[u8]) -> bool {
+    let data = raw.split(|&b| b == b'#').next().unwrap_or(raw);
+    words(data).count() == 7
 }
 
 /// True when every line of the OBJ `bytes` that is not valid UTF-8 is a comment or names
@@ -1987,6 +2005,12 @@ f -3 -2 -1
         assert_eq!(mesh.triangles.len(), 1);
         assert_eq!(mesh.aabb().1, [1.0, 0.0, 1.0]);
         assert!(read(format!("{v4}v 0 0 -.5\nf 1 2 5\n")).is_ok());
+        // Colours on some vertices only (tobj refused them): the positions are read.
+        let mesh = read(format!(
+            "v 0 0 0 1 0 0\n{v4}v 0 0 2 0.5 0.5 0.5 # c\nf 3 4 6\n"
+        ))
+        .unwrap();
+        assert_eq!((mesh.triangles.len(), mesh.aabb().1), (1, [1.0, 1.0, 2.0]));
         for (text, expected) in [
             (format!("{v4}  f 1 2 3\n"), "line 5: an indented line"),
             (
