@@ -948,6 +948,17 @@ fn parse_stl(path: &Path, bytes: &[u8]) -> Result<MeshData, MeshError> {
     let binary_size =
         declared_triangles.map(|n| STL_BINARY_HEADER as u64 + STL_BINARY_TRIANGLE * u64::from(n));
 
+    // An ASCII file with carriage returns alone (classic Mac OS) ends its lines with them.
+    let converted: Vec<u8>;
+    let bytes = if ascii && bytes.contains(&b'\r') && !bytes.contains(&b'\n') {
+        converted = bytes
+            .iter()
+            .map(|&b| if b == b'\r' { b'\n' } else { b })
+            .collect();
+        &converted[..]
+    } else {
+        bytes
+    };
     let (format, input): (&'static str, Cow<'_, [u8]>) = if ascii {
         // ASCII. Replace the first line by one stl_io accepts ("solid " + name).
         let start = solid_keyword_offset(bytes).unwrap_or(0);
@@ -964,6 +975,13 @@ fn parse_stl(path: &Path, bytes: &[u8]) -> Result<MeshData, MeshError> {
                 Some(b"endsolid") => (ended, any_end) = (true, true),
                 Some(b"solid") if ended => ended = false,
                 None => {} // a blank line
+                // Normals are not used (and may be NaN): the reader gets zeros.
+                Some(b"facet")
+                    if words(line).nth(1) == Some(b"normal") && words(line).count() == 5 =>
+                {
+                    ended = false;
+                    normalised.extend_from_slice(b"facet normal 0 0 0\n");
+                }
                 _ => {
                     ended = false;
                     normalised.extend_from_slice(line);
@@ -1151,11 +1169,9 @@ fn ascii_stl_error_line(bytes: &[u8]) -> Option<(usize, String, String)> {
             }
             Next::Facet => {
                 next = Next::Loop;
-                if words.len() != 5 || words[0] != "facet" || words[1] != "normal" {
-                    Some("expected `facet normal x y z` or `endsolid`".to_string())
-                } else {
-                    numbers(&words[2..])
-                }
+                // The normal's values are not read (see `parse_stl`).
+                (words.len() != 5 || words[0] != "facet" || words[1] != "normal")
+                    .then(|| "expected `facet normal x y z` or `endsolid`".to_string())
             }
             Next::Loop => {
                 next = Next::Vertex(0);
@@ -2177,6 +2193,18 @@ f -3 -2 -1
         }
         let good = format!("solid x\n{facet}endsolid x\n");
         assert!(load_mesh(&write(&dir, "good.stl", good.as_bytes())).is_ok());
+        // Normals are not read (NaN is fine), and carriage returns alone end lines.
+        let nan = good.replacen("facet normal 0 0 1", "facet normal nan inf -nan", 1);
+        assert!(load_mesh(&write(&dir, "nan.stl", nan.as_bytes())).is_ok());
+        let classic = good.replace('\n', "\r");
+        let mesh = load_mesh(&write(&dir, "cr.stl", classic.as_bytes())).unwrap();
+        assert_eq!(mesh.triangles.len(), 1);
+        let odd = good.replacen("facet normal 0 0 1", "facet nromal 0 0 1", 1);
+        let message = load_err(&write(&dir, "odd.stl", odd.as_bytes()));
+        assert!(
+            message.contains("line 2: expected `facet normal x y z`"),
+            "{message}"
+        );
         // After a byte order mark on its own line, lines are still counted from the file's
         // first.
         let bom =
