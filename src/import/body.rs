@@ -459,6 +459,7 @@ fn check_collada(text: &str) -> std::result::Result<Collada, String> {
         return Ok(Collada {
             triangles: 0,
             instances: Vec::new(),
+            ids: Vec::new(),
             cut: Vec::new(),
         });
     };
@@ -704,9 +705,14 @@ fn check_collada(text: &str) -> std::result::Result<Collada, String> {
             }
         }
     }
-    let instances = collada_instances(&doc, &ids)?;
-    let placed = instances.iter().fold(0u64, |sum, (id, _)| {
-        sum.saturating_add(per_geometry.get(id.as_str()).copied().unwrap_or(0))
+    let (instances, names) = collada_instances(&doc, &ids)?;
+    let mut placements = vec![0u64; names.len()];
+    for &(k, _) in &instances {
+        placements[k] += 1;
+    }
+    let placed = names.iter().zip(&placements).fold(0u64, |sum, (id, &n)| {
+        let each = per_geometry.get(id.as_str()).copied().unwrap_or(0);
+        sum.saturating_add(each.saturating_mul(n))
     });
     // The reader is given the file without its visual scenes: it then builds every geometry
     // once, untransformed, and the instances place them.
@@ -719,6 +725,7 @@ fn check_collada(text: &str) -> std::result::Result<Collada, String> {
     Ok(Collada {
         triangles: triangles.max(placed),
         instances,
+        ids: names,
         cut,
     })
 }
@@ -728,8 +735,11 @@ fn check_collada(text: &str) -> std::result::Result<Collada, String> {
 struct Collada {
     /// Upper bound of the triangles the reader builds and the scene places.
     triangles: u64,
-    /// The geometries placed by the scene: id and transform, one per instance.
-    instances: Vec<(String, nalgebra::Matrix4<f64>)>,
+    /// The geometries placed by the scene: the index of its id in `ids` and its transform,
+    /// one per instance.
+    instances: Vec<(usize, nalgebra::Matrix4<f64>)>,
+    /// The ids of the placed geometries, each once.
+    ids: Vec<String>,
     /// Byte ranges of the `<library_visual_scenes>` elements.
     cut: Vec<Range<usize>>,
 }
@@ -737,16 +747,21 @@ struct Collada {
 /// Most geometry instances a COLLADA file's scene may place.
 const MAX_COLLADA_INSTANCES: usize = 100_000;
 
+/// Most child elements of placed nodes a COLLADA scene walk reads (each node's children
+/// counted once per placement).
+const MAX_COLLADA_WORK: usize = 10_000_000;
+
 /// The geometries the scene of a COLLADA document places, as coal, MoveIt and tesseract take
 /// them from Assimp: from the visual scene that `<scene><instance_visual_scene>` names, every
 /// `<instance_geometry>` under its nodes (and under the nodes an `<instance_node>` names), once
 /// per instance, with the product of its nodes' transforms (`<matrix>`, `<translate>`,
 /// `<rotate>`, `<scale>`, composed in document order); neither the asset's unit nor its up axis
 /// (Assimp's root transform, which they drop).
+#[allow(clippy::type_complexity)]
 fn collada_instances(
     doc: &roxmltree::Document,
     ids: &std::collections::HashMap<&str, roxmltree::Node>,
-) -> std::result::Result<Vec<(String, nalgebra::Matrix4<f64>)>, String> {
+) -> std::result::Result<(Vec<(usize, nalgebra::Matrix4<f64>)>, Vec<String>), String> {
     use nalgebra::Matrix4;
     let line = |n: roxmltree::Node| doc.text_pos_at(n.range().start).row;
     let root = doc.root_element();
@@ -783,11 +798,12 @@ fn collada_instances(
                 "lookat" => 9,
                 _ => continue,
             };
-            // The element's first text (a comment before the numbers is skipped).
+            // The element's first text that is not blank (as Assimp's XML reader takes it:
+            // a comment before the numbers is skipped, one among them ends them).
             let text = c
                 .children()
-                .find(|t| t.is_text())
-                .and_then(|t| t.text())
+                .filter_map(|t| t.is_text().then(|| t.text()).flatten())
+                .find(|t| !t.trim().is_empty())
                 .unwrap_or("");
             let values: Vec<f64> = text
                 .split_ascii_whitespace()
@@ -904,6 +920,8 @@ fn collada_instances(
         ));
     }
     let mut out = Vec::new();
+    let mut names: Vec<String> = Vec::new();
+    let mut interned: std::collections::HashMap<(usize, usize), usize> = Default::default();
     // Depth-first over (node, transform of its parent, depth); the visual scene's own
     // children first.
     let mut stack: Vec<(roxmltree::Node, Matrix4<f64>, usize)> = visual
@@ -915,11 +933,21 @@ fn collada_instances(
     // Nodes visited or waiting (counted when they are found, so the stack stays within the
     // limit too).
     let mut visits = stack.len();
+    let mut work = 0usize;
     let mut children = Vec::new();
     while let Some((node, parent, depth)) = stack.pop() {
         if visits > MAX_COLLADA_INSTANCES || depth > crate::limits::MAX_MESH_XML_DEPTH {
             return Err(format!(
                 "the scene places more than {MAX_COLLADA_INSTANCES} nodes (or nests them too deep)"
+            ));
+        }
+        // Every element a visit reads counts, so that a large node placed many times is
+        // refused instead of read for minutes.
+        work += node.children().count();
+        if work > MAX_COLLADA_WORK {
+            return Err(format!(
+                "the scene's nodes hold more than {MAX_COLLADA_WORK} elements where they are \
+                 placed (a large node placed many times)"
             ));
         }
         let m = parent * transform(node)?;
@@ -948,7 +976,18 @@ fn collada_instances(
                             "the scene places more than {MAX_COLLADA_INSTANCES} geometries"
                         ));
                     }
-                    out.push((url()?.to_string(), m));
+                    // Each id is kept once per element that names it, however often that
+                    // is placed (known by where its text lies, so that a long id is neither
+                    // copied nor hashed again).
+                    let id = url()?;
+                    let next = names.len();
+                    let k = *interned
+                        .entry((id.as_ptr() as usize, id.len()))
+                        .or_insert(next);
+                    if k == next {
+                        names.push(id.to_string());
+                    }
+                    out.push((k, m));
                 }
                 "instance_controller" => {
                     return Err(format!(
@@ -966,7 +1005,7 @@ fn collada_instances(
     if out.is_empty() {
         return Err("the scene places no geometry (no <instance_geometry> in its nodes)".into());
     }
-    Ok(out)
+    Ok((out, names))
 }
 
 /// Runs `f` and returns its value, or the panic's message (shortened) if it panicked, without
@@ -1013,6 +1052,7 @@ fn collada_corners(path: &Path) -> std::result::Result<Vec<(u32, [f64; 3])>, Str
     let Collada {
         triangles,
         instances,
+        ids,
         cut,
     } = check_collada(&text)?;
     let limit = crate::limits::MAX_MESH_TRIANGLES as u64;
@@ -1038,6 +1078,9 @@ fn collada_corners(path: &Path) -> std::result::Result<Vec<(u32, [f64; 3])>, Str
             let mut at = 0;
             for r in &cut {
                 plain.push_str(&text[at..r.start]);
+                // Its line ends stay, so that the reader's messages name the file's lines.
+                let lines = text[r.clone()].matches('\n').count();
+                plain.extend(std::iter::repeat_n('\n', lines));
                 at = r.end;
             }
             plain.push_str(&text[at..]);
@@ -1045,11 +1088,11 @@ fn collada_corners(path: &Path) -> std::result::Result<Vec<(u32, [f64; 3])>, Str
         }
         std::borrow::Cow::Owned(_) => None,
     };
-    let bytes = plain.unwrap_or(bytes);
+    let input: &[u8] = plain.as_deref().unwrap_or(&bytes);
     // The COLLADA reader panics on some malformed files (a missing source, a short array)
     // instead of returning an error: such a panic is this file's error too.
     let scene = catch_quietly(|| {
-        mesh_loader::Loader::default().load_from_slice_with_reader(&bytes, path, refuse)
+        mesh_loader::Loader::default().load_from_slice_with_reader(input, path, refuse)
     })
     .map_err(|why| {
         let said = if why.is_empty() {
@@ -1063,10 +1106,12 @@ fn collada_corners(path: &Path) -> std::result::Result<Vec<(u32, [f64; 3])>, Str
     let meshes: std::collections::HashMap<&str, &mesh_loader::Mesh> =
         scene.meshes.iter().map(|m| (m.name.as_str(), m)).collect();
     let mut corners = Vec::new();
-    for (id, transform) in &instances {
+    let mesh_of: Vec<Option<&&mesh_loader::Mesh>> =
+        ids.iter().map(|id| meshes.get(id.as_str())).collect();
+    for &(k, ref transform) in &instances {
         // A geometry of another kind than <mesh>, or an id that names no geometry, builds
         // nothing, as in Assimp.
-        let Some(m) = meshes.get(id.as_str()) else {
+        let Some(m) = mesh_of[k] else {
             continue;
         };
         for f in &m.faces {
@@ -1632,6 +1677,21 @@ mod tests {
             )
             .replacen("<library_visual_scenes>", &wide, 1);
         assert!(refused("wide.dae", &wide).contains("more than 100000 nodes"));
+        // A large node placed many times is refused by the elements its placements read.
+        let heavy = format!(
+            "<library_nodes><node id=\"heavy\">{}</node><node id=\"many\">{}</node>\
+             </library_nodes><library_visual_scenes>",
+            "<extra/>".repeat(200),
+            "<instance_node url=\"#heavy\"/>".repeat(60_000)
+        );
+        let heavy = text
+            .replacen(
+                "<instance_geometry url=\"#link2-mesh\"/>",
+                "<instance_geometry url=\"#link2-mesh\"/><instance_node url=\"#many\"/>",
+                1,
+            )
+            .replacen("<library_visual_scenes>", &heavy, 1);
+        assert!(refused("heavy.dae", &heavy).contains("more than 10000000 elements"));
         // As Assimp composes a node: <lookat> (eye, target, up), <skew> ignored, a comment
         // before the numbers skipped, a <matrix>'s bottom row not used on the vertices.
         let lookat = moved.replacen(
@@ -1642,8 +1702,26 @@ mod tests {
         assert_eq!(bounds("lookat.dae", &lookat, [1.0; 3]), (lo3, hi3));
         let skew = moved.replacen("<translate>", "<skew>45 0 1 0 1 0 0</skew><translate>", 1);
         assert_eq!(bounds("skew.dae", &skew, [1.0; 3]), (lo3, hi3));
-        let comment = moved.replacen("<translate>", "<translate><!-- metres -->", 1);
+        let comment = moved.replacen("<translate>", "<translate>\n  <!-- metres -->", 1);
         assert_eq!(bounds("comment.dae", &comment, [1.0; 3]), (lo3, hi3));
+        // With the visual scenes first, the reader's messages still name the file's lines.
+        let (vs0, vs1) = (
+            text.find("<library_visual_scenes>").unwrap(),
+            text.find("</library_visual_scenes>").unwrap() + "</library_visual_scenes>".len(),
+        );
+        let geometries = text.find("<library_geometries>").unwrap();
+        let first = format!(
+            "{}{}{}{}",
+            &text[..geometries],
+            &text[vs0..vs1],
+            &text[geometries..vs0],
+            &text[vs1..]
+        );
+        let p = first.find("<p>").unwrap() + "<p>".len();
+        let broken = format!("{}x {}", &first[..p], &first[p..]);
+        let line = broken[..p].matches('\n').count() + 1;
+        let said = refused("first.dae", &broken);
+        assert!(said.contains(&format!("({line}:")), "line {line}: {said}");
         let matrix = moved.replacen(
             "<translate>1 2 3</translate>",
             "<matrix>1 0 0 1 0 1 0 2 0 0 1 3 0 0 0 2</matrix>",

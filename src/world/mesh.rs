@@ -876,8 +876,9 @@ pub fn count_triangles(path: &Path) -> Option<usize> {
         "stl" => {
             let (declared, ascii) = stl_layout(&bytes);
             if ascii {
+                // Lines may end with carriage returns alone (see `parse_stl`).
                 let facets = bytes
-                    .split(|&b| b == b'\n')
+                    .split(|&b| b == b'\n' || b == b'\r')
                     .filter(|line| words(line).next() == Some(b"facet"));
                 Some(facets.count())
             } else {
@@ -886,6 +887,17 @@ pub fn count_triangles(path: &Path) -> Option<usize> {
         }
         _ => None,
     }
+}
+
+/// Text `bytes` whose carriage returns that end a line alone (classic Mac OS, also mixed with
+/// other line ends) become line feeds; `None` when there are none.
+fn lone_carriage_returns(bytes: &[u8]) -> Option<Vec<u8>> {
+    let lone = |i: usize| bytes[i] == b'\r' && bytes.get(i + 1) != Some(&b'\n');
+    (0..bytes.len()).any(lone).then(|| {
+        (0..bytes.len())
+            .map(|i| if lone(i) { b'\n' } else { bytes[i] })
+            .collect()
+    })
 }
 
 /// The words of a line of a text mesh file: its runs of bytes between ASCII whitespace.
@@ -898,7 +910,8 @@ fn words(line: &[u8]) -> impl Iterator<Item = &[u8]> {
 fn obj_counts(bytes: &[u8]) -> (usize, usize) {
     let (mut triangles, mut vertices) = (0usize, 0usize);
     for line in bytes.split(|&b| b == b'\n') {
-        let mut tokens = words(line);
+        let data = line.split(|&b| b == b'#').next().unwrap_or(line);
+        let mut tokens = words(data);
         match tokens.next() {
             Some(b"f") => triangles += tokens.count().saturating_sub(2),
             Some(b"v") => vertices += 1,
@@ -950,14 +963,12 @@ fn parse_stl(path: &Path, bytes: &[u8]) -> Result<MeshData, MeshError> {
 
     // An ASCII file with carriage returns alone (classic Mac OS) ends its lines with them.
     let converted: Vec<u8>;
-    let bytes = if ascii && bytes.contains(&b'\r') && !bytes.contains(&b'\n') {
-        converted = bytes
-            .iter()
-            .map(|&b| if b == b'\r' { b'\n' } else { b })
-            .collect();
-        &converted[..]
-    } else {
-        bytes
+    let bytes = match lone_carriage_returns(bytes).filter(|_| ascii) {
+        Some(lines) => {
+            converted = lines;
+            &converted[..]
+        }
+        None => bytes,
     };
     let (format, input): (&'static str, Cow<'_, [u8]>) = if ascii {
         // ASCII. Replace the first line by one stl_io accepts ("solid " + name).
@@ -1220,14 +1231,12 @@ fn parse_obj(path: &Path, bytes: &[u8]) -> Result<MeshData, MeshError> {
     // only (classic Mac OS) ends its lines with them.
     let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
     let converted: Vec<u8>;
-    let bytes = if bytes.contains(&b'\r') && !bytes.contains(&b'\n') {
-        converted = bytes
-            .iter()
-            .map(|&b| if b == b'\r' { b'\n' } else { b })
-            .collect();
-        &converted[..]
-    } else {
-        bytes
+    let bytes = match lone_carriage_returns(bytes) {
+        Some(lines) => {
+            converted = lines;
+            &converted[..]
+        }
+        None => bytes,
     };
     // Text in another encoding (Latin-1 is common) only in comments and names does not touch
     // the geometry: those lines are read with the bytes replaced. Elsewhere it is an error.
@@ -1350,25 +1359,38 @@ fn obj_prepare(bytes: &[u8]) -> Result<Option<Vec<u8>>, ObjRefusal> {
     for (number, raw) in bytes.split(|&b| b == b'\n').enumerate() {
         let first = words(raw).next().unwrap_or(b"");
         let geometry = GEOMETRY.contains(&first);
-        if geometry && matches!(raw.first(), Some(b' ' | b'\t')) {
-            return refuse(
-                number,
-                raw,
-                "an indented line, which Assimp-based readers (coal, MoveIt) skip: remove the leading spaces",
-            );
+        let data = raw.split(|&b| b == b'#').next().unwrap_or(raw);
+        // As tobj splits a line: at any Unicode space (a vertical tab, a no-break space).
+        let text = String::from_utf8_lossy(data);
+        let keyword = text.split_whitespace().next().unwrap_or("");
+        if ["v", "vt", "vn", "f"].contains(&keyword) {
+            if text.starts_with(char::is_whitespace) {
+                return refuse(
+                    number,
+                    raw,
+                    "an indented line, which Assimp-based readers (coal, MoveIt) skip: remove the leading spaces",
+                );
+            }
+            if text.contains(|c: char| c.is_whitespace() && !matches!(c, ' ' | '\t' | '\r')) {
+                return refuse(
+                    number,
+                    raw,
+                    "a space other than a blank or a tab, which Assimp-based readers (coal, MoveIt) do not read as one: use blanks",
+                );
+            }
         }
-        if first == b"v" && words(raw).skip(1).any(|w| w.starts_with(b".")) {
+        if first == b"v" && words(data).skip(1).any(|w| w.starts_with(b".")) {
             return refuse(
                 number,
                 raw,
                 "a coordinate written with a bare leading dot, whose vertex Assimp-based readers (coal, MoveIt) drop: write 0.5 for .5",
             );
         }
-        if first.starts_with(b"#") && raw.trim_ascii_end().ends_with(b"\\") {
+        if raw.strip_suffix(b"\r").unwrap_or(raw).ends_with(b"\\") {
             return refuse(
                 number,
                 raw,
-                "a comment ending in a backslash, to which Assimp-based readers (coal, MoveIt) join the next line: remove the backslash",
+                "a line ending in a backslash, to which Assimp-based readers (coal, MoveIt) join the next line: remove the backslash",
             );
         }
         rewrite |= matches!(first, b"l" | b"p")
@@ -2004,8 +2026,6 @@ f -3 -2 -1
         assert!(message.contains("not valid UTF-8"), "{message}");
     }
 
-    /// A file tobj refuses is named with the line that breaks its rule, quoted; so is a
-    /// coordinate tobj reads as not finite.
     /// OBJ lines that Assimp-based readers (coal, MoveIt) read otherwise than tobj: polylines
     /// and points are dropped and comments after data cut (as Assimp does); indented geometry
     /// lines, bare leading dots and comments ending in a backslash are refused with their line.
@@ -2021,6 +2041,16 @@ f -3 -2 -1
         assert_eq!(mesh.triangles.len(), 1);
         assert_eq!(mesh.aabb().1, [1.0, 0.0, 1.0]);
         assert!(read(format!("{v4}v 0 0 -.5\nf 1 2 5\n")).is_ok());
+        // A dot or a backslash in a comment, not ending the line, is no matter; nor is an
+        // indented polyline (dropped anyway).
+        assert!(read(format!("{v4}v 0 0 1 # .5 m\n# c \\ \n  l 1 2\nf 1 2 5\n")).is_ok());
+        // Comments are not counted as corners ahead of reading.
+        let path = write(
+            &dir,
+            "c.obj",
+            format!("{v4}f 1 2 3 # one two three four\n").as_bytes(),
+        );
+        assert_eq!(count_triangles(&path), Some(1));
         // Colours on some vertices only (tobj refused them): the positions are read.
         let mesh = read(format!(
             "v 0 0 0 1 0 0\n{v4}v 0 0 2 0.5 0.5 0.5 # c\nf 3 4 6\n"
@@ -2039,7 +2069,19 @@ f -3 -2 -1
             ),
             (
                 format!("# apex \\\n{v4}f 1 2 3\n"),
-                "line 1: a comment ending in a backslash",
+                "line 1: a line ending in a backslash",
+            ),
+            (
+                format!("{v4}v 0 0 1 # apex \\\r\nf 1 2 5\n"),
+                "line 5: a line ending in a backslash",
+            ),
+            (
+                format!("{v4}\u{b}v 0 0 1\nf 1 2 5\n"),
+                "line 5: an indented line",
+            ),
+            (
+                format!("{v4}v\u{a0}0 0 1\nf 1 2 5\n"),
+                "line 5: a space other than a blank or a tab",
             ),
         ] {
             let message = read(text.clone()).unwrap_err().to_string();
@@ -2051,6 +2093,8 @@ f -3 -2 -1
         }
     }
 
+    /// A file tobj refuses is named with the line that breaks its rule, quoted; so is a
+    /// coordinate tobj reads as not finite.
     #[test]
     fn obj_errors_name_the_line() {
         let dir = tempfile::tempdir().unwrap();
@@ -2197,8 +2241,17 @@ f -3 -2 -1
         let nan = good.replacen("facet normal 0 0 1", "facet normal nan inf -nan", 1);
         assert!(load_mesh(&write(&dir, "nan.stl", nan.as_bytes())).is_ok());
         let classic = good.replace('\n', "\r");
-        let mesh = load_mesh(&write(&dir, "cr.stl", classic.as_bytes())).unwrap();
-        assert_eq!(mesh.triangles.len(), 1);
+        let path = write(&dir, "cr.stl", classic.as_bytes());
+        assert_eq!(load_mesh(&path).unwrap().triangles.len(), 1);
+        assert_eq!(count_triangles(&path), Some(1), "counted ahead as read");
+        let mixed = format!("{}\n", classic.trim_end());
+        assert_eq!(
+            load_mesh(&write(&dir, "mixed.stl", mixed.as_bytes()))
+                .unwrap()
+                .triangles
+                .len(),
+            1
+        );
         let odd = good.replacen("facet normal 0 0 1", "facet nromal 0 0 1", 1);
         let message = load_err(&write(&dir, "odd.stl", odd.as_bytes()));
         assert!(
