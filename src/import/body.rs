@@ -1663,34 +1663,40 @@ mod tests {
             1,
         );
         assert!(refused("loop.dae", &looped).contains("more than 100000"));
-        // A node of 200,000 references to another is refused at the limit.
-        let wide = format!(
-            "<library_nodes><node id=\"wide\">{}</node><node id=\"leaf\"/></library_nodes>\
-             <library_visual_scenes>",
-            "<instance_node url=\"#leaf\"/>".repeat(200_000)
-        );
-        let wide = text
-            .replacen(
+        // The file with `nodes` as its library and the scene's node placing library node
+        // `placed` too.
+        let with_library = |nodes: String, placed: &str| {
+            text.replacen(
                 "<instance_geometry url=\"#link2-mesh\"/>",
-                "<instance_geometry url=\"#link2-mesh\"/><instance_node url=\"#wide\"/>",
+                &format!(
+                    "<instance_geometry url=\"#link2-mesh\"/><instance_node url=\"#{placed}\"/>"
+                ),
                 1,
             )
-            .replacen("<library_visual_scenes>", &wide, 1);
+            .replacen(
+                "<library_visual_scenes>",
+                &format!("<library_nodes>{nodes}</library_nodes><library_visual_scenes>"),
+                1,
+            )
+        };
+        // A node of 200,000 references to another is refused at the limit.
+        let wide = with_library(
+            format!(
+                "<node id=\"wide\">{}</node><node id=\"leaf\"/>",
+                "<instance_node url=\"#leaf\"/>".repeat(200_000)
+            ),
+            "wide",
+        );
         assert!(refused("wide.dae", &wide).contains("more than 100000 nodes"));
         // A large node placed many times is refused by the elements its placements read.
-        let heavy = format!(
-            "<library_nodes><node id=\"heavy\">{}</node><node id=\"many\">{}</node>\
-             </library_nodes><library_visual_scenes>",
-            "<extra/>".repeat(200),
-            "<instance_node url=\"#heavy\"/>".repeat(60_000)
+        let heavy = with_library(
+            format!(
+                "<node id=\"heavy\">{}</node><node id=\"many\">{}</node>",
+                "<extra/>".repeat(200),
+                "<instance_node url=\"#heavy\"/>".repeat(60_000)
+            ),
+            "many",
         );
-        let heavy = text
-            .replacen(
-                "<instance_geometry url=\"#link2-mesh\"/>",
-                "<instance_geometry url=\"#link2-mesh\"/><instance_node url=\"#many\"/>",
-                1,
-            )
-            .replacen("<library_visual_scenes>", &heavy, 1);
         assert!(refused("heavy.dae", &heavy).contains("more than 10000000 elements"));
         // As Assimp composes a node: <lookat> (eye, target, up), <skew> ignored, a comment
         // before the numbers skipped, a <matrix>'s bottom row not used on the vertices.
