@@ -1753,6 +1753,31 @@ mod tests {
             1,
         );
         assert!(refused("outside.dae", &outside).contains("directly in the <visual_scene>"));
+        // A skinned mesh, a reference outside the file and a scene that names no visual scene.
+        for (name, from, to, says) in [
+            (
+                "skin.dae",
+                "<instance_geometry url=\"#link2-mesh\"/>",
+                "<instance_controller url=\"#skin\"/>",
+                "<instance_controller>: a skinned mesh is not supported",
+            ),
+            (
+                "outer.dae",
+                "<instance_geometry url=\"#link2-mesh\"/>",
+                "<instance_geometry url=\"other.dae#link2-mesh\"/>",
+                "<instance_geometry url=\"other.dae#link2-mesh\">: not a reference within the file",
+            ),
+            (
+                "scene.dae",
+                "<instance_visual_scene url=\"#Scene\"/>",
+                "<instance_visual_scene url=\"#link2-mesh\"/>",
+                "<instance_visual_scene url=\"#link2-mesh\">: names no <visual_scene>",
+            ),
+        ] {
+            assert!(text.contains(from), "{from}");
+            let said = refused(name, &text.replacen(from, to, 1));
+            assert!(said.starts_with("line ") && said.contains(says), "{said}");
+        }
         let short = moved.replacen("1 2 3", "1 2", 1);
         assert!(refused("short.dae", &short)
             .contains("<translate>1 2</translate>: needs 3 finite numbers"));
