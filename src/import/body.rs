@@ -441,7 +441,8 @@ pub fn resolve_mesh(
 /// `<Name_array>` or `<IDREF_array>` with values there). And what the reader panics on: every
 /// `source="#id"` in a geometry names an element of the kind it expects, an accessor's stride
 /// is not 0, positions and normals are three floats per vertex within their array, and every
-/// vertex index names a position. Anything else is left to the reader. Returns an upper bound
+/// vertex index names a position; a position accessor reads X, Y, Z first (the reader takes
+/// them by place, the format by name). Anything else is left to the reader. Returns an upper bound
 /// of the triangles the reader will build (exact for `<triangles>` and `<polylist>`), with the
 /// geometries the scene places ([`collada_instances`]).
 fn check_collada(text: &str) -> std::result::Result<Collada, String> {
@@ -754,9 +755,11 @@ const MAX_COLLADA_WORK: usize = 10_000_000;
 /// The geometries the scene of a COLLADA document places, as coal, MoveIt and tesseract take
 /// them from Assimp: from the visual scene that `<scene><instance_visual_scene>` names, every
 /// `<instance_geometry>` under its nodes (and under the nodes an `<instance_node>` names), once
-/// per instance, with the product of its nodes' transforms (`<matrix>`, `<translate>`,
-/// `<rotate>`, `<scale>`, composed in document order); neither the asset's unit nor its up axis
-/// (Assimp's root transform, which they drop).
+/// per instance (as index into the returned ids, each id kept once per element naming it),
+/// with the product of its nodes' transforms (`<matrix>`, `<translate>`, `<rotate>`, `<scale>`,
+/// `<lookat>`, composed in document order; `<skew>` ignored, as by Assimp); neither the asset's
+/// unit nor its up axis (Assimp's root transform, which they drop). The walk is bounded
+/// ([`MAX_COLLADA_INSTANCES`] nodes, [`MAX_COLLADA_WORK`] child elements read).
 #[allow(clippy::type_complexity)]
 fn collada_instances(
     doc: &roxmltree::Document,

@@ -1339,17 +1339,20 @@ fn parse_obj(path: &Path, bytes: &[u8]) -> Result<MeshData, MeshError> {
     Ok(mesh)
 }
 
+/// A line [`obj_prepare`] refuses: its number (from 1), its text as [`quote`] gives it, and why.
+type ObjRefusal = (usize, String, &'static str);
+
 /// The OBJ `bytes` as tobj is given them, or the first line that Assimp-based readers (coal,
 /// MoveIt, so the independent checkers of a plan) read otherwise than tobj, with its text and
-/// why. Refused: a geometry line indented by spaces or tabs (Assimp skips it), a vertex
-/// coordinate written with a bare leading dot such as `.5` (Assimp drops the vertex), a
-/// comment ending in a backslash (Assimp joins the next line to it). Rewritten, when present
+/// why. Refused: a `v`, `vt`, `vn` or `f` line that is indented or holds a space other than a
+/// blank or a tab (Assimp skips it), a vertex coordinate written with a bare leading dot such
+/// as `.5` (Assimp drops the vertex), any line ending in a backslash (Assimp joins the next
+/// line to it). Rewritten, when present
 /// (`Some`; lines keep their numbers): `l` and `p` lines are emptied (tobj would fill a
 /// polyline of three or more points as a polygon; Assimp drops lines and points, as collision
 /// geometry must), a `#` comment after the data of a `v`, `vt`, `vn` or `f` line is cut
 /// (tobj cannot read it; Assimp skips it), and a vertex colour is dropped (tobj refuses colours
 /// on some vertices only; Assimp reads them; neither is geometry).
-type ObjRefusal = (usize, String, &'static str);
 fn obj_prepare(bytes: &[u8]) -> Result<Option<Vec<u8>>, ObjRefusal> {
     const GEOMETRY: [&[u8]; 6] = [b"v", b"vt", b"vn", b"f", b"l", b"p"];
     let refuse = |number: usize, raw: &[u8], why: &'static str| {
@@ -2027,8 +2030,9 @@ f -3 -2 -1
     }
 
     /// OBJ lines that Assimp-based readers (coal, MoveIt) read otherwise than tobj: polylines
-    /// and points are dropped and comments after data cut (as Assimp does); indented geometry
-    /// lines, bare leading dots and comments ending in a backslash are refused with their line.
+    /// and points are dropped, comments after data cut and vertex colours dropped (as Assimp
+    /// reads them); indented geometry lines, spaces other than blanks and tabs, bare leading dots
+    /// and lines ending in a backslash are refused with their line.
     #[test]
     fn obj_is_read_as_assimp_based_readers_read_it() {
         let dir = tempfile::tempdir().unwrap();
