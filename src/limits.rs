@@ -66,6 +66,19 @@ pub fn iteration_cap(axes: usize, ik_steps: usize) -> usize {
     let by_ik = MAX_IK_AXIS_STEPS / axes / ik_steps.max(1);
     by_search.min(by_ik).clamp(1, MAX_ITERATIONS)
 }
+/// Most nodes one planner run may hold in its trees together: an iteration adds up to
+/// [`crate::planning::rrt::CONNECT_STEPS`] nodes per tree when its steps are short (a large
+/// `planner.lambda`) and never blocked, and the nearest-node search scans the tree, so the
+/// iteration limits alone do not bound a run's work. A run that reaches it stops, as at its
+/// iteration budget.
+pub const MAX_TREE_NODES: usize = 100_000;
+
+/// The most tree nodes a planner run of a design of `axes` free axes may hold:
+/// [`MAX_TREE_NODES`], and fewer beyond 24 axes, as [`MAX_ITERATION_AXES`] caps iterations.
+pub fn node_cap(axes: usize) -> usize {
+    (MAX_ITERATION_AXES / axes.max(1)).clamp(1, MAX_TREE_NODES)
+}
+
 /// Most shape casts the `ccd` checker makes in one planner run (one body against one obstacle,
 /// or one self pair, over one sub-step; against a triangle mesh, one more per triangle whose
 /// bounding box comes near the moving body, the triangles the cast may test): its cost per edge

@@ -1355,16 +1355,12 @@ pub fn robot_body(
     if options.body == BodyChoice::Capsules {
         return Ok(capsules(urdf, None));
     }
+    let by_name: std::collections::HashMap<&str, &urdf_rs::Link> =
+        robot.links.iter().map(|l| (l.name.as_str(), l)).collect();
     let links: Vec<&urdf_rs::Link> = urdf
         .carried
         .iter()
-        .map(|c| {
-            robot
-                .links
-                .iter()
-                .find(|l| l.name == c.name)
-                .expect("carried links are the robot's")
-        })
+        .map(|c| by_name[c.name.as_str()])
         .collect();
     let count: usize = links.iter().map(|l| l.collision.len()).sum();
     let limit = crate::limits::MAX_COLLISION_ELEMENTS;

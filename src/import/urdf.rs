@@ -927,6 +927,25 @@ pub fn chain_from_urdf(
     // The link being built: can it take more axes (identity origin, coordinate axes)?
     let mut open: Option<(Link, Axis, bool)> = None;
     let mut started = false;
+    // The leading fixed joints' product so far: the links before the chain starts are kept
+    // in the first base frame, and `start` moves them into the last.
+    let mut lead = IsometryMatrix3::identity();
+    let start = |started: &mut bool,
+                 lead: &mut IsometryMatrix3<f64>,
+                 group: &mut Vec<(&urdf_rs::Link, IsometryMatrix3<f64>)>,
+                 carried: &mut Vec<CarriedLink>| {
+        if !*started {
+            let inv = lead.inverse();
+            for (_, pose) in group.iter_mut() {
+                *pose = inv * *pose;
+            }
+            for c in carried.iter_mut() {
+                c.pose = inv * c.pose;
+            }
+            *lead = IsometryMatrix3::identity();
+            *started = true;
+        }
+    };
     let mut tool = IsometryMatrix3::identity();
     let last = path.len().saturating_sub(1);
     for (k, j) in path.iter().enumerate() {
@@ -945,26 +964,22 @@ pub fn chain_from_urdf(
         }
         if j.joint_type == urdf_rs::JointType::Fixed {
             if !started && child.collision.is_empty() {
-                // Leading fixed joint to a link without geometry: part of the base pose.
+                // Leading fixed joint to a link without geometry: part of the base pose. The
+                // links so far are kept in the first base frame and moved into the last one
+                // once, when the chain starts (one pass, however many such joints).
                 base_pose *= origin;
-                let inv = origin.inverse();
-                for (_, pose) in &mut group {
-                    *pose = inv * *pose;
-                }
-                for c in &mut carried {
-                    c.pose = inv * c.pose;
-                }
-                group.push((child, IsometryMatrix3::identity()));
-                carried.push(carry(&child.name, 0, IsometryMatrix3::identity()));
+                lead *= origin;
+                group.push((child, lead));
+                carried.push(carry(&child.name, 0, lead));
                 continue;
             }
-            started = true;
+            start(&mut started, &mut lead, &mut group, &mut carried);
             pending *= origin;
             group.push((child, pending));
             carried.push(carry(&child.name, names.len(), pending));
             continue;
         }
-        started = true;
+        start(&mut started, &mut lead, &mut group, &mut carried);
         let rotation = j.joint_type != urdf_rs::JointType::Prismatic;
         let (axis, align) = chain_axis(j, rotation)?;
         let range = joint_range(j)?;
@@ -1038,6 +1053,60 @@ pub fn rename_joints(report: &mut crate::planning::ReachReport, names: &[String]
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Leading fixed joints to links without geometry become the base pose, and every link
+    /// before the chain starts is carried by the base frame at its pose there: on a chain of
+    /// 2,000 such joints (turned and moved) before a revolute one, the base pose times each
+    /// carried pose is the product of the joints' origins up to that link.
+    #[test]
+    fn leading_fixed_joints_make_the_base_pose() {
+        let n = 2_000;
+        let mut xml = String::from("<robot name=\"r\">");
+        for i in 0..=n + 1 {
+            xml += &format!("<link name=\"l{i}\"/>");
+        }
+        let origin = |i: usize| {
+            let f = i as f64;
+            (
+                [0.01 * (f * 0.7).sin(), 0.02, 0.001 * f.cos()],
+                [0.3 * (f * 1.3).sin(), 0.2 * f.cos(), 0.1],
+            )
+        };
+        for i in 0..n {
+            let (xyz, rpy) = origin(i);
+            xml += &format!(
+                "<joint name=\"f{i}\" type=\"fixed\"><parent link=\"l{i}\"/><child link=\"l{}\"/><origin xyz=\"{} {} {}\" rpy=\"{} {} {}\"/></joint>",
+                i + 1, xyz[0], xyz[1], xyz[2], rpy[0], rpy[1], rpy[2]
+            );
+        }
+        xml += &format!(
+            "<joint name=\"j\" type=\"revolute\"><parent link=\"l{n}\"/><child link=\"l{}\"/><axis xyz=\"0 0 1\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/></joint></robot>",
+            n + 1
+        );
+        let robot = urdf_rs::read_from_string(&xml).unwrap();
+        let u = chain_from_urdf(&robot, None, None, None, 4).unwrap();
+        let base = *u.chain.base();
+        let mut world = IsometryMatrix3::identity();
+        for i in 0..=n {
+            if i > 0 {
+                let (xyz, rpy) = origin(i - 1);
+                world *= IsometryMatrix3::from_parts(
+                    Translation3::new(xyz[0], xyz[1], xyz[2]),
+                    nalgebra::Rotation3::from_euler_angles(rpy[0], rpy[1], rpy[2]),
+                );
+            }
+            let c = &u.carried[i];
+            assert_eq!((c.name.as_str(), c.level), (format!("l{i}").as_str(), 0));
+            let placed = base * c.pose;
+            let moved = (placed.translation.vector - world.translation.vector).norm();
+            let turned = (placed.rotation.matrix() - world.rotation.matrix()).norm();
+            assert!(
+                moved < 1e-9 && turned < 1e-9,
+                "link {i}: {placed} against {world}"
+            );
+        }
+        assert!((base.inverse() * world).translation.vector.norm() < 1e-9);
+    }
 
     #[test]
     fn polyline_search_backtracks_and_orients_segments() {

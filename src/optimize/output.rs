@@ -65,7 +65,8 @@ pub struct RobustReachability {
     pub max: f64,
     /// `R` for each seed.
     pub values: Vec<f64>,
-    /// Distinct final candidates that were re-checked.
+    /// Distinct final candidates re-checked: those that could be chosen (see the runner's
+    /// re-check), usually 1.
     pub candidates: usize,
 }
 

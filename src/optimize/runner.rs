@@ -9,7 +9,7 @@ use super::{Cutoff, Evaluated, Optimizer, StepContext};
 use crate::error::{Error, Result};
 use crate::io::write_atomic;
 use crate::planning::ReachReport;
-use crate::scenario::{Algorithm, Scenario};
+use crate::scenario::{Algorithm, ObjectiveWeights, Scenario};
 use crate::Design;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -432,6 +432,93 @@ pub const RECHECK_STREAM: u64 = 1 << 50;
 
 /// Distinct final candidates re-checked at the end of a run (the best by cost).
 pub const RECHECK_CANDIDATES: usize = 8;
+
+/// The lowest cost (paper Eq. 23) `design` can have for any reachability `R` in `[0, 1]`: a
+/// bound no re-check can go below. The cost is affine in `R` below 1 and has its own value at
+/// `R = 1`, so the bound is the least of the values at 0, just below 1, and 1 (each computed
+/// as [`super::objective::breakdown`] computes it, so that the bound holds in floating point).
+pub(crate) fn lowest_possible_cost(design: &Design, weights: &ObjectiveWeights) -> f64 {
+    let below_one = 1.0 - f64::EPSILON / 2.0;
+    [0.0, below_one, 1.0]
+        .into_iter()
+        .map(|r| super::objective::breakdown(design, r, weights).cost)
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// The re-check's choice among `chosen` (distinct candidates in run order, with their
+/// designs): `recheck(e)` gives a candidate's `R` for each of the `k` re-check seeds. Returns
+/// the index of the candidate whose cost is lowest with its lowest re-checked `R` (ties:
+/// higher mean `R`, then lower cost in the run, then run order) and its figures, whose
+/// `candidates` counts the candidates re-checked.
+///
+/// Candidates are re-checked in the order of [`lowest_possible_cost`] (ties: run order), and
+/// once that bound exceeds the lowest robust cost found, the rest are left out: each of them
+/// would cost more than the pick whatever its re-check gave, so the choice is the one of
+/// re-checking every candidate.
+pub(crate) fn pick_rechecked(
+    chosen: &[(Evaluated, Design)],
+    weights: &ObjectiveWeights,
+    k: usize,
+    mut recheck: impl FnMut(&Evaluated) -> Vec<f64>,
+) -> Result<(usize, RobustReachability)> {
+    let floors: Vec<f64> = chosen
+        .iter()
+        .map(|(_, d)| lowest_possible_cost(d, weights))
+        .collect();
+    let mut order: Vec<usize> = (0..chosen.len()).collect();
+    order.sort_by(|&a, &b| floors[a].total_cmp(&floors[b]).then(a.cmp(&b)));
+    // Per candidate, once re-checked: its robust cost, mean R and figures.
+    let mut done: Vec<Option<(f64, f64, RobustReachability)>> = vec![None; chosen.len()];
+    let mut lowest = f64::INFINITY;
+    let mut rechecked = 0;
+    for &c in &order {
+        if floors[c] > lowest {
+            break; // neither this candidate nor a later one can beat or tie the pick
+        }
+        let (e, design) = &chosen[c];
+        let values = recheck(e);
+        let min = values.iter().copied().fold(f64::INFINITY, f64::min);
+        let max = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let mean = values.iter().sum::<f64>() / k as f64;
+        let robust_cost = super::objective::breakdown(design, min, weights).cost;
+        lowest = lowest.min(robust_cost);
+        rechecked += 1;
+        let figures = RobustReachability {
+            seeds: k,
+            first_stream: RECHECK_STREAM,
+            min,
+            mean,
+            max,
+            values,
+            candidates: 0,
+        };
+        done[c] = Some((robust_cost, mean, figures));
+    }
+    // The pick among the re-checked, in run order as if every candidate had been re-checked
+    // (one left out could not have been picked).
+    let mut pick: Option<(f64, f64, usize)> = None;
+    for (c, d) in done.iter().enumerate() {
+        let Some((robust_cost, mean, _)) = d else {
+            continue;
+        };
+        let (robust_cost, mean) = (*robust_cost, *mean);
+        let better = match pick {
+            None => true,
+            Some((cost, m, p)) => {
+                robust_cost < cost
+                    || (robust_cost == cost
+                        && (mean > m || (mean == m && chosen[c].0.cost < chosen[p].0.cost)))
+            }
+        };
+        if better {
+            pick = Some((robust_cost, mean, c));
+        }
+    }
+    let (_, _, c) = pick.ok_or_else(|| Error::invalid("recheck", 0, "no candidate"))?;
+    let (_, _, mut robust) = done[c].take().expect("the pick was re-checked");
+    robust.candidates = rechecked;
+    Ok((c, robust))
+}
 
 /// The counters of a run that a checkpoint records.
 #[derive(Clone, Copy, Debug)]
@@ -986,6 +1073,12 @@ impl<'a> Runner<'a> {
     /// Re-checks the best distinct final candidates with `recheck_seeds` fresh planner seeds
     /// and returns the one whose cost is lowest with its lowest re-checked `R` (ties: higher
     /// mean `R`, then lower cost in the run), with its figures. Without a re-check, `best`.
+    ///
+    /// The candidates are re-checked one at a time (its seeds in parallel), in the order of
+    /// the lowest cost any re-check could give them ([`lowest_possible_cost`]), until none of
+    /// the others could beat or tie the pick: those could not be chosen, so the result is the
+    /// one of re-checking them all. Usually the first candidate re-checks at `R = 1` and is
+    /// the only one re-checked.
     fn recheck(
         &self,
         objective: &Objective,
@@ -998,6 +1091,7 @@ impl<'a> Runner<'a> {
             return Ok((best, None));
         }
         let space = objective.space();
+        let weights = objective.weights();
         let mut pool: Vec<&Evaluated> = candidates;
         pool.push(&best);
         pool.sort_by(|a, b| a.cost.total_cmp(&b.cost).then(a.stream.cmp(&b.stream)));
@@ -1011,56 +1105,19 @@ impl<'a> Runner<'a> {
                 }
             }
         }
-        let jobs: Vec<(usize, u64)> = (0..chosen.len())
-            .flat_map(|c| (0..k as u64).map(move |j| (c, j)))
-            .collect();
-        // Each candidate's chain and body are built once for its re-check runs.
-        let prepared: Vec<_> = chosen
-            .par_iter()
-            .map(|(e, _)| objective.prepare(&e.x))
-            .collect();
-        let values: Vec<f64> = jobs
-            .par_iter()
-            .map(|&(c, j)| {
-                let e = &chosen[c].0;
-                objective
-                    .plan_design(&prepared[c], RECHECK_STREAM + j, e.progress)
-                    .0
-                    .reachability
-            })
-            .collect();
-        let weights = objective.weights();
-        let mut pick: Option<(f64, f64, usize)> = None;
-        let mut figures = Vec::with_capacity(chosen.len());
-        for (c, (e, design)) in chosen.iter().enumerate() {
-            let v = &values[c * k..(c + 1) * k];
-            let min = v.iter().copied().fold(f64::INFINITY, f64::min);
-            let max = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-            let mean = v.iter().sum::<f64>() / k as f64;
-            let robust_cost = super::objective::breakdown(design, min, weights).cost;
-            let better = match pick {
-                None => true,
-                Some((cost, m, p)) => {
-                    robust_cost < cost
-                        || (robust_cost == cost
-                            && (mean > m || (mean == m && e.cost < chosen[p].0.cost)))
-                }
-            };
-            if better {
-                pick = Some((robust_cost, mean, c));
-            }
-            figures.push(RobustReachability {
-                seeds: k,
-                first_stream: RECHECK_STREAM,
-                min,
-                mean,
-                max,
-                values: v.to_vec(),
-                candidates: chosen.len(),
-            });
-        }
-        let (_, _, c) = pick.ok_or_else(|| Error::invalid("recheck", 0, "no candidate"))?;
-        let robust = figures.swap_remove(c);
+        let (c, robust) = pick_rechecked(&chosen, weights, k, |e| {
+            // Its chain and body are built once for its re-check runs.
+            let prepared = objective.prepare(&e.x);
+            (0..k as u64)
+                .into_par_iter()
+                .map(|j| {
+                    objective
+                        .plan_design(&prepared, RECHECK_STREAM + j, e.progress)
+                        .0
+                        .reachability
+                })
+                .collect()
+        })?;
         Ok((chosen.swap_remove(c).0, Some(robust)))
     }
 
@@ -1201,6 +1258,134 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The re-check leaves out only candidates that could not be chosen: on random candidates
+    /// of the paper-2d design space, random weights (`λ0` of either sign) and random re-check
+    /// values, its choice and figures are those of re-checking every candidate (brute force),
+    /// and the bound it orders by is below the cost at every `R`. When the first candidate
+    /// re-checks at `R = 1` and costs least, it is the only one re-checked.
+    #[test]
+    fn the_recheck_leaves_out_only_candidates_that_could_not_be_chosen() {
+        use rand::{RngExt, SeedableRng};
+        let s = Scenario::load(
+            &Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scenarios/paper-2d.toml"),
+        )
+        .unwrap();
+        let (lo, hi) = (s.space.lower(), s.space.upper());
+        let mut rng = ChaCha8Rng::seed_from_u64(17);
+        let mut skipped = 0;
+        for case in 0..2000 {
+            let w = ObjectiveWeights {
+                lambda0: rng.random_range(-5.0..20.0),
+                lambda1: rng.random_range(0.0..2.0),
+                lambda2: rng.random_range(0.0..2.0),
+                lambda3: rng.random_range(0.0..1.0),
+                lambda4: rng.random_range(0.0..1.0),
+                lambda5: rng.random_range(0.0..30.0),
+            };
+            let n = rng.random_range(1..=RECHECK_CANDIDATES);
+            let k = rng.random_range(1..=4);
+            let chosen: Vec<(Evaluated, Design)> = (0..n)
+                .map(|i| {
+                    let x: Vec<f64> = lo
+                        .iter()
+                        .zip(hi.iter())
+                        .map(|(&a, &b)| {
+                            if rng.random_bool(0.3) {
+                                a
+                            } else {
+                                rng.random_range(a..=b)
+                            }
+                        })
+                        .collect();
+                    let e = Evaluated {
+                        x: x.clone(),
+                        cost: rng.random_range(0.0..40.0),
+                        reachability: 1.0,
+                        stream: i as u64,
+                        progress: 0.0,
+                    };
+                    (e, s.space.decode(&x))
+                })
+                .collect();
+            // Re-check values per candidate: mostly 1, else a tenth.
+            let values: Vec<Vec<f64>> = (0..n)
+                .map(|_| {
+                    (0..k)
+                        .map(|_| {
+                            if rng.random_bool(0.6) {
+                                1.0
+                            } else {
+                                f64::from(rng.random_range(0..10u8)) / 10.0
+                            }
+                        })
+                        .collect()
+                })
+                .collect();
+            for (_, d) in &chosen {
+                let floor = lowest_possible_cost(d, &w);
+                for t in 0..=10 {
+                    let r = f64::from(t) / 10.0;
+                    let cost = crate::optimize::objective::breakdown(d, r, &w).cost;
+                    assert!(
+                        floor <= cost,
+                        "case {case}: bound {floor} above {cost} at R = {r}"
+                    );
+                }
+            }
+            let at = |e: &Evaluated| e.stream as usize;
+            let mut calls = 0;
+            let (c, robust) = pick_rechecked(&chosen, &w, k, |e| {
+                calls += 1;
+                values[at(e)].clone()
+            })
+            .unwrap();
+            // Brute force: every candidate re-checked, the first best in run order kept.
+            let scored: Vec<(f64, f64)> = chosen
+                .iter()
+                .zip(&values)
+                .map(|((_, d), v)| {
+                    let min = v.iter().copied().fold(f64::INFINITY, f64::min);
+                    let mean = v.iter().sum::<f64>() / k as f64;
+                    (crate::optimize::objective::breakdown(d, min, &w).cost, mean)
+                })
+                .collect();
+            let mut best = 0;
+            for i in 1..n {
+                let ((ci, mi), (cb, mb)) = (scored[i], scored[best]);
+                if ci < cb
+                    || (ci == cb
+                        && (mi > mb || (mi == mb && chosen[i].0.cost < chosen[best].0.cost)))
+                {
+                    best = i;
+                }
+            }
+            assert_eq!(c, best, "case {case}");
+            assert_eq!(robust.values, values[best], "case {case}");
+            assert_eq!(robust.mean, scored[best].1, "case {case}");
+            assert_eq!(robust.candidates, calls, "case {case}");
+            skipped += n - calls;
+        }
+        assert!(skipped > 0, "no candidate was ever left out");
+        // A typical end of run: the best candidate (the largest design without a link)
+        // re-checks at R = 1 and is the only one re-checked (the largest costs more at any R).
+        let w = ObjectiveWeights::default();
+        let largest = s.space.largest();
+        let shorter = s.space.decode(&initial_designs(&s.space)[1]);
+        let run = |d: &Design, stream| Evaluated {
+            x: s.space.encode(d),
+            cost: crate::optimize::objective::breakdown(d, 1.0, &w).cost,
+            reachability: 1.0,
+            stream,
+            progress: 0.0,
+        };
+        let chosen = vec![
+            (run(&shorter, 0), shorter.clone()),
+            (run(&largest, 1), largest.clone()),
+        ];
+        let (c, robust) = pick_rechecked(&chosen, &w, 2, |_| vec![1.0, 1.0]).unwrap();
+        assert_eq!((c, robust.candidates), (0, 1));
     }
 
     /// A `best.json` whose planner record has no `ik_hold_limits` (written when the key was

@@ -326,6 +326,13 @@ fn plan(
                     growth.iterations,
                     crate::limits::MAX_CCD_CASTS
                 )
+            } else if growth.node_limited {
+                format!(
+                    "{} iterations, stopped at the planner's limit of {} tree nodes per run for {} axes",
+                    growth.iterations,
+                    crate::limits::node_cap(chain.dof()),
+                    chain.dof()
+                )
             } else {
                 format!("{} iterations", growth.iterations)
             };

@@ -322,6 +322,9 @@ pub struct Growth {
     /// True when the run stopped because its checker's work reached
     /// [`crate::limits::MAX_CCD_CASTS`] (before the iteration budget).
     pub work_limited: bool,
+    /// True when the run stopped because its trees held [`crate::limits::node_cap`] nodes
+    /// (before the iteration budget).
+    pub node_limited: bool,
 }
 
 impl Growth {
@@ -335,6 +338,7 @@ impl Growth {
             joins: 0,
             home_blocked: true,
             work_limited: false,
+            node_limited: false,
         }
     }
 }
@@ -417,6 +421,8 @@ pub struct Rrt<'a> {
     orientations: &'a [TaskOrientation],
     /// Most shape casts of the checker per run ([`crate::limits::MAX_CCD_CASTS`]).
     cast_cap: u64,
+    /// Most nodes of the run's trees together ([`crate::limits::node_cap`]).
+    node_cap: usize,
 }
 
 impl<'a> Rrt<'a> {
@@ -435,6 +441,7 @@ impl<'a> Rrt<'a> {
             tasks,
             orientations: &[],
             cast_cap: crate::limits::MAX_CCD_CASTS,
+            node_cap: crate::limits::node_cap(chain.dof()),
         }
     }
 
@@ -442,6 +449,13 @@ impl<'a> Rrt<'a> {
     #[cfg(test)]
     fn with_cast_cap(mut self, cap: u64) -> Self {
         self.cast_cap = cap;
+        self
+    }
+
+    /// The same planner with another cap on its trees' nodes (tests).
+    #[cfg(test)]
+    fn with_node_cap(mut self, cap: usize) -> Self {
+        self.node_cap = cap;
         self
     }
 
@@ -494,8 +508,13 @@ impl<'a> Rrt<'a> {
         };
         let mut first = aimed;
         for _ in 0..30 {
-            for ((q, a), b) in work.q_new.iter_mut().zip(from).zip(target) {
-                *q = a + s * (b - a);
+            // A point between two configurations within the ranges may round past a limit
+            // (`a + 1·(b − a)` may differ from `b` in its last bit): it is held within them,
+            // since a waypoint past a limit by one unit in the last place fails a strict
+            // bounds check elsewhere (MoveIt's, with its default margin of 0).
+            let steps = work.q_new.iter_mut().zip(from).zip(target);
+            for (((q, a), b), axis) in steps.zip(self.chain.free_axes()) {
+                *q = axis.range.clamp(a + s * (b - a));
             }
             self.chain.fk(&work.q_new, &mut work.frames);
             let m = metric(
@@ -831,6 +850,7 @@ impl<'a> Rrt<'a> {
                 joins: 0,
                 home_blocked: true,
                 work_limited: false,
+                node_limited: false,
             };
         }
         chain.fk(&home, &mut s.work.frames);
@@ -846,6 +866,8 @@ impl<'a> Rrt<'a> {
         let mut iterations = 0;
         let casts_before = scratch.stats.casts;
         let mut work_limited = false;
+        let mut node_limited = false;
+        let node_cap = self.node_cap;
         while s
             .reached
             .iter()
@@ -865,6 +887,12 @@ impl<'a> Rrt<'a> {
             // of every body and self pair): its work, counted in shape casts, is capped.
             if scratch.stats.casts - casts_before >= self.cast_cap {
                 work_limited = true;
+                break;
+            }
+            // Short unblocked steps add many nodes per iteration, and each search for the
+            // nearest node scans a tree: the nodes are capped too.
+            if s.tree.len() + s.goals.iter().map(|g| g.tree.len()).sum::<usize>() >= node_cap {
+                node_limited = true;
                 break;
             }
             iterations += 1;
@@ -895,6 +923,7 @@ impl<'a> Rrt<'a> {
             joins: s.joins,
             home_blocked: false,
             work_limited,
+            node_limited,
         }
     }
 }
@@ -1158,6 +1187,97 @@ mod tests {
         assert!(
             spent >= cap && spent < cap + 50 * per_edge.max(1),
             "{spent} vs {cap}"
+        );
+    }
+
+    /// The trees' nodes are capped: with a huge `lambda` every step is tiny and never blocked,
+    /// so each iteration adds up to [`CONNECT_STEPS`] nodes; such a run stops once its trees
+    /// hold the cap (a connect's nodes beyond it at most) and says so, where the same run with
+    /// the scenario's `lambda` spends its iteration budget without coming near the cap.
+    #[test]
+    fn the_trees_nodes_are_capped() {
+        use crate::collision::{make_checker, BodyModel, CheckerKind, CollisionScene};
+        use std::sync::Arc;
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("examples/scenarios/paper-2d.toml");
+        let s = crate::Scenario::load(&path).unwrap();
+        let chain = s.space.largest().chain();
+        let scene = Arc::new(CollisionScene::new(&s.workspace));
+        // A task out of reach of every collision-free posture: inside the first obstacle.
+        let t = s.workspace.obstacles[0].pose().translation;
+        let tasks = [Point3::new(t.x, t.y, t.z)];
+        let checker = make_checker(CheckerKind::Certified, scene, BodyModel::Capsules);
+        let run = |lambda: f64| {
+            let mut config = s.planner.clone();
+            config.lambda = lambda;
+            config.max_iterations = 300;
+            config.budget_growth = 1;
+            let mut scratch = Scratch::new(&chain);
+            let rrt = Rrt::new(&chain, checker.as_ref(), &config, &tasks).with_node_cap(1_000);
+            let mut rng = rand::SeedableRng::seed_from_u64(4);
+            rrt.grow(&mut rng, &mut scratch)
+        };
+        let tiny = run(1e6);
+        assert!(tiny.node_limited);
+        assert!(tiny.iterations < 300, "{}", tiny.iterations);
+        assert!(
+            (1_000..1_000 + 2 * CONNECT_STEPS).contains(&tiny.tree.len()),
+            "{}",
+            tiny.tree.len()
+        );
+        let plain = run(s.planner.lambda);
+        assert!(!plain.node_limited);
+        assert_eq!(plain.iterations, 300);
+        assert!(plain.tree.len() < 1_000, "{}", plain.tree.len());
+        assert_eq!(crate::limits::node_cap(24), crate::limits::MAX_TREE_NODES);
+        assert_eq!(crate::limits::node_cap(384), 6_250);
+    }
+
+    /// Every node lies within the axis ranges, to the last bit, also where the ranges' limits
+    /// are values that an interpolation toward them overshoots by rounding: the paper-2d
+    /// design with each moving axis cut to an odd range, over 10 planner seeds.
+    #[test]
+    fn every_node_lies_within_the_ranges() {
+        use crate::collision::{make_checker, BodyModel, CheckerKind, CollisionScene};
+        use std::sync::Arc;
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("examples/scenarios/paper-2d.toml");
+        let s = crate::Scenario::load(&path).unwrap();
+        let mut design = s.space.largest();
+        for (i, link) in design.links.iter_mut().enumerate() {
+            for r in link.axes.0.iter_mut().filter(|r| r.max > r.min) {
+                let f = 1.0 + i as f64 / 7.0;
+                (r.min, r.max) = (-0.026370230686744066 * f, 0.02571272691296143 * f);
+            }
+        }
+        let chain = design.chain();
+        let scene = Arc::new(CollisionScene::new(&s.workspace));
+        let checker = make_checker(CheckerKind::Certified, scene, BodyModel::Capsules);
+        let mut config = s.planner.clone();
+        config.max_iterations = 200;
+        config.budget_growth = 1;
+        let (mut nodes, mut at_limit) = (0, 0);
+        for seed in 0..10 {
+            let mut scratch = Scratch::new(&chain);
+            let rrt = Rrt::new(&chain, checker.as_ref(), &config, &s.workspace.tasks);
+            let mut rng = rand::SeedableRng::seed_from_u64(seed);
+            let growth = rrt.grow(&mut rng, &mut scratch);
+            for i in 0..growth.tree.len() as u32 {
+                for (q, axis) in growth.tree.config(i).iter().zip(chain.free_axes()) {
+                    assert!(
+                        axis.range.min <= *q && *q <= axis.range.max,
+                        "seed {seed}, node {i}: {q:e} outside [{:e}, {:e}]",
+                        axis.range.min,
+                        axis.range.max
+                    );
+                    at_limit += usize::from(*q == axis.range.min || *q == axis.range.max);
+                }
+                nodes += 1;
+            }
+        }
+        assert!(
+            nodes > 100 && at_limit > 0,
+            "{nodes} nodes, {at_limit} values at a limit"
         );
     }
 
