@@ -12,62 +12,107 @@ use std::path::{Path, PathBuf};
 /// such as `/dev/stdout`, a terminal) is written into directly, as a shell's `>` would, and is
 /// never replaced; a directory is refused.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let write_err = |source| Error::Write {
-        path: path.to_path_buf(),
-        source,
-    };
-    // An existing target that is not a regular file is written into, whatever links lead to
-    // it: `/dev/stdout` is a link to `/proc/self/fd/1`, whose target (`pipe:[N]` for a pipe)
-    // names nothing a path can be resolved to, but opens.
-    if let Ok(m) = std::fs::metadata(path) {
-        if !m.is_file() && !m.is_dir() {
+    let mut staged = Staged::default();
+    staged.add(path, bytes)?;
+    staged.commit()
+}
+
+/// Several output files written together, all or none as far as a file system allows: each
+/// regular file is written into a temporary file beside it as it is added ([`Staged::add`]),
+/// and [`Staged::commit`] then writes the devices and pipes among the targets and renames the
+/// temporary files into place. An error before the renames (a full disk, a device that
+/// refuses the bytes) leaves every target as it was: the temporary files are removed. Targets
+/// are handled as [`write_atomic`] handles one.
+#[derive(Debug, Default)]
+pub struct Staged {
+    /// Regular-file targets (as given, and with links resolved) with their written temporary
+    /// files.
+    files: Vec<(PathBuf, PathBuf, tempfile::NamedTempFile)>,
+    /// Targets that are neither regular files nor directories, with their bytes.
+    devices: Vec<(PathBuf, Vec<u8>)>,
+}
+
+impl Staged {
+    /// Stages `bytes` for `path`: a regular file's bytes go to a temporary file beside it now,
+    /// a device's are kept for [`Staged::commit`].
+    pub fn add(&mut self, path: &Path, bytes: &[u8]) -> Result<()> {
+        let write_err = |source| Error::Write {
+            path: path.to_path_buf(),
+            source,
+        };
+        // An existing target that is not a regular file is written into, whatever links lead
+        // to it: `/dev/stdout` is a link to `/proc/self/fd/1`, whose target (`pipe:[N]` for a
+        // pipe) names nothing a path can be resolved to, but opens.
+        if let Ok(m) = std::fs::metadata(path) {
+            if !m.is_file() && !m.is_dir() {
+                self.devices.push((path.to_path_buf(), bytes.to_vec()));
+                return Ok(());
+            }
+        }
+        let resolved;
+        let target = match std::fs::symlink_metadata(path) {
+            Ok(m) if m.file_type().is_symlink() => {
+                resolved = std::fs::canonicalize(path).map_err(|_| {
+                    write_err(std::io::Error::new(
+                        std::io::ErrorKind::NotFound,
+                        "a dangling symbolic link",
+                    ))
+                })?;
+                resolved.as_path()
+            }
+            _ => path,
+        };
+        if std::fs::metadata(target).is_ok_and(|m| m.is_dir()) {
+            return Err(write_err(std::io::Error::new(
+                std::io::ErrorKind::IsADirectory,
+                "is a directory",
+            )));
+        }
+        let dir = folder_of(target);
+        let mut tmp = tempfile::Builder::new()
+            .prefix(".kinsynth-")
+            .suffix(".tmp")
+            .tempfile_in(dir)
+            .map_err(write_err)?;
+        tmp.write_all(bytes).map_err(write_err)?;
+        tmp.as_file().sync_all().map_err(write_err)?;
+        // Temporary files are created private (0600); results are ordinary files (0644).
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            tmp.as_file()
+                .set_permissions(std::fs::Permissions::from_mode(0o644))
+                .map_err(write_err)?;
+        }
+        self.files
+            .push((path.to_path_buf(), target.to_path_buf(), tmp));
+        Ok(())
+    }
+
+    /// Writes the staged devices and pipes, then renames every temporary file over its
+    /// target. On an error the temporary files not yet renamed are removed.
+    pub fn commit(self) -> Result<()> {
+        for (path, bytes) in &self.devices {
+            let write_err = |source| Error::Write {
+                path: path.clone(),
+                source,
+            };
             let mut f = std::fs::OpenOptions::new()
                 .write(true)
                 .open(path)
                 .map_err(write_err)?;
-            return f
-                .write_all(bytes)
+            f.write_all(bytes)
                 .and_then(|()| f.flush())
-                .map_err(write_err);
+                .map_err(write_err)?;
         }
-    }
-    let resolved;
-    let target = match std::fs::symlink_metadata(path) {
-        Ok(m) if m.file_type().is_symlink() => {
-            resolved = std::fs::canonicalize(path).map_err(|_| {
-                write_err(std::io::Error::new(
-                    std::io::ErrorKind::NotFound,
-                    "a dangling symbolic link",
-                ))
+        for (path, target, tmp) in self.files {
+            tmp.persist(&target).map_err(|e| Error::Write {
+                path,
+                source: e.error,
             })?;
-            resolved.as_path()
         }
-        _ => path,
-    };
-    if std::fs::metadata(target).is_ok_and(|m| m.is_dir()) {
-        return Err(write_err(std::io::Error::new(
-            std::io::ErrorKind::IsADirectory,
-            "is a directory",
-        )));
+        Ok(())
     }
-    let dir = folder_of(target);
-    let mut tmp = tempfile::Builder::new()
-        .prefix(".kinsynth-")
-        .suffix(".tmp")
-        .tempfile_in(dir)
-        .map_err(write_err)?;
-    tmp.write_all(bytes).map_err(write_err)?;
-    tmp.as_file().sync_all().map_err(write_err)?;
-    // Temporary files are created private (0600); results are ordinary files (0644).
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        tmp.as_file()
-            .set_permissions(std::fs::Permissions::from_mode(0o644))
-            .map_err(write_err)?;
-    }
-    tmp.persist(target).map_err(|e| write_err(e.error))?;
-    Ok(())
 }
 
 /// The folder a file `path` lies in (`.` for a bare name).

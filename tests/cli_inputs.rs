@@ -1750,3 +1750,59 @@ fn island_count_and_tree_without_report_are_refused() {
     assert_eq!(code, Some(2), "{stderr}");
     assert!(stderr.contains("--json"), "{stderr}");
 }
+
+/// Outputs are written together: when one of them cannot be written (a device that refuses
+/// the bytes, as a full disk would), the command fails with a one-line error naming it and
+/// none of the others is written: not `urdf`'s URDF beside a refused SRDF, not `reach`'s JSON
+/// report or trajectories beside a refused SRDF (and a trajectories folder the run would have
+/// created is not left behind). The same outputs to regular files are all written.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_refused_output_leaves_the_others_unwritten() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = write(dir.path(), "d.json", &design("0.3", "[-1, 1]", 2));
+    let urdf = dir.path().join("z.urdf");
+    rejected(
+        &[
+            "urdf".as_ref(),
+            d.as_os_str(),
+            "-o".as_ref(),
+            urdf.as_os_str(),
+            "--srdf".as_ref(),
+            "/dev/full".as_ref(),
+        ],
+        &["/dev/full", "No space left"],
+    );
+    assert!(!urdf.exists());
+    let cell = repo("examples/scenarios/paper-2d.toml");
+    let (json, traj) = (dir.path().join("r.json"), dir.path().join("traj"));
+    let reach = |srdf: &Path| -> Vec<std::ffi::OsString> {
+        [
+            "reach".as_ref(),
+            cell.as_os_str(),
+            "--json".as_ref(),
+            json.as_os_str(),
+            "--trajectories".as_ref(),
+            traj.as_os_str(),
+            "--write-srdf".as_ref(),
+            srdf.as_os_str(),
+        ]
+        .iter()
+        .map(|a: &&OsStr| a.to_os_string())
+        .collect()
+    };
+    let args = reach(Path::new("/dev/full"));
+    let args: Vec<&OsStr> = args.iter().map(|a| a.as_os_str()).collect();
+    rejected(&args, &["/dev/full", "No space left"]);
+    assert!(!json.exists() && !traj.exists());
+    let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+    assert_eq!(names.len(), 1, "only the design: {names:?}");
+    // To regular files, everything is written.
+    let srdf = dir.path().join("r.srdf");
+    let args = reach(&srdf);
+    let args: Vec<&OsStr> = args.iter().map(|a| a.as_os_str()).collect();
+    let (code, stderr) = run(&args);
+    assert_eq!(code, Some(0), "{stderr}");
+    assert!(json.is_file() && srdf.is_file());
+    assert_eq!(std::fs::read_dir(&traj).unwrap().count(), 20);
+}

@@ -262,14 +262,18 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
             }
         }
     }
-    if let Some(path) = json {
+    // Every output is staged, then all are put in place together: an error writing one
+    // (a full disk, a device that refuses) leaves none written.
+    let mut staged = kinsynth::io::Staged::default();
+    if let Some(path) = &json {
         let mut v = report.to_json_value(stream);
         if let Some(spread) = spread {
             v["spread"] = spread;
         }
         let text = serde_json::to_string_pretty(&v).expect("a report serialises");
-        kinsynth::io::write_atomic(&path, text.as_bytes())?;
+        staged.add(path, text.as_bytes())?;
     }
+    let mut srdf_pairs = 0;
     if let Some(path) = &write_srdf {
         // The body the planner used: the imported one, else the one it builds from the
         // planner's self-collision settings.
@@ -285,18 +289,36 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         let group = group
             .as_ref()
             .map(|(base, tip, _)| (base.as_str(), tip.as_str()));
-        kinsynth::export::srdf::write_body_srdf(checked, group, name, path)?;
+        let text = kinsynth::export::srdf::body_srdf_text(checked, group, name, path);
+        staged.add(path, text.as_bytes())?;
+        srdf_pairs = checked.acm().disabled().len();
+    }
+    // A trajectories folder this run creates is removed again if the outputs fail.
+    let created = urdf.trajectories.as_ref().filter(|d| !d.exists());
+    let committed = (|| {
+        let mut files = 0;
+        if let Some(dir) = &urdf.trajectories {
+            files =
+                kinsynth::export::trajectory::stage_trajectories(&report, dir, &mut staged)?.len();
+        }
+        staged.commit()?;
+        Ok::<_, kinsynth::Error>(files)
+    })();
+    if committed.is_err() {
+        if let Some(dir) = created {
+            let _ = std::fs::remove_dir(dir); // only if still empty
+        }
+    }
+    let trajectory_files = committed?;
+    if let Some(path) = &write_srdf {
         say!(
-            "wrote {} ({} pairs never checked)",
-            path.display(),
-            checked.acm().disabled().len()
+            "wrote {} ({srdf_pairs} pairs never checked)",
+            path.display()
         );
     }
     if let Some(dir) = &urdf.trajectories {
-        let files = kinsynth::export::trajectory::write_trajectories(&report, dir)?;
         say!(
-            "wrote {} trajectory files to {}",
-            files.len(),
+            "wrote {trajectory_files} trajectory files to {}",
             dir.display()
         );
     }

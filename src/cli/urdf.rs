@@ -93,11 +93,19 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
             });
         }
     }
-    kinsynth::export::write_urdf(&d, &output)?;
+    // Both files are staged, then put in place together: an error writing one (a full disk,
+    // a device that refuses) leaves neither written.
+    let mut staged = kinsynth::io::Staged::default();
+    staged.add(
+        &output,
+        kinsynth::export::urdf::urdf_text(&d, &output).as_bytes(),
+    )?;
     let body = kinsynth::collision::RobotBody::capsules(&d.chain(), &config);
     if let Some(srdf) = &srdf {
-        kinsynth::export::srdf::write_body_srdf(&body, None, None, srdf)?;
+        let text = kinsynth::export::srdf::body_srdf_text(&body, None, None, srdf);
+        staged.add(srdf, text.as_bytes())?;
     }
+    staged.commit()?;
     // A design folded through itself at home is exported as it is (its SRDF keeps the crossing
     // pair enabled), but it cannot start any motion: say so.
     if let Some((a, b)) = body.acm().home_fold() {

@@ -86,17 +86,27 @@ pub fn write_body_srdf(
     name: Option<&str>,
     path: &Path,
 ) -> Result<()> {
+    crate::io::write_atomic(path, body_srdf_text(body, group, name, path).as_bytes())
+}
+
+/// The text [`write_body_srdf`] writes to `path`, for a caller that writes it with others
+/// ([`crate::io::Staged`]).
+pub fn body_srdf_text(
+    body: &RobotBody,
+    group: Option<(&str, &str)>,
+    name: Option<&str>,
+    path: &Path,
+) -> String {
     let stem = path
         .file_stem()
         .and_then(|s| s.to_str())
         .filter(|s| !s.is_empty())
         .unwrap_or("kinsynth_robot");
     let name = name.unwrap_or(stem);
-    let text = match group {
+    match group {
         Some((base, tip)) => chain_body_to_srdf(body, name, base, tip),
         None => body_to_srdf(body, name),
-    };
-    crate::io::write_atomic(path, text.as_bytes())
+    }
 }
 
 #[cfg(test)]

@@ -199,6 +199,19 @@ pub fn check_trajectory_files(dir: &Path, indices: impl IntoIterator<Item = usiz
 /// Writes `task_{index}.csv` and `task_{index}.json` into `dir` (created if missing) for every
 /// reached task of `report`, atomically; returns the files written.
 pub fn write_trajectories(report: &ReachReport, dir: &Path) -> Result<Vec<PathBuf>> {
+    let mut staged = crate::io::Staged::default();
+    let written = stage_trajectories(report, dir, &mut staged)?;
+    staged.commit()?;
+    Ok(written)
+}
+
+/// As [`write_trajectories`], staged in `staged` with a caller's other outputs (`dir` is
+/// created now); returns the files it will write.
+pub fn stage_trajectories(
+    report: &ReachReport,
+    dir: &Path,
+    staged: &mut crate::io::Staged,
+) -> Result<Vec<PathBuf>> {
     std::fs::create_dir_all(dir).map_err(|source| Error::Write {
         path: dir.to_path_buf(),
         source,
@@ -210,8 +223,8 @@ pub fn write_trajectories(report: &ReachReport, dir: &Path) -> Result<Vec<PathBu
         let Some(path) = &t.path else { continue };
         let traj = Trajectory::from_path(path);
         let [csv, json] = trajectory_files(dir, t.index);
-        crate::io::write_atomic(&csv, traj.to_csv().as_bytes())?;
-        crate::io::write_atomic(&json, traj.to_json().as_bytes())?;
+        staged.add(&csv, traj.to_csv().as_bytes())?;
+        staged.add(&json, traj.to_json().as_bytes())?;
         written.push(csv);
         written.push(json);
     }

@@ -365,12 +365,18 @@ pub fn design_to_urdf_string(design: &Design, name: &str) -> String {
 
 /// Writes the URDF of `design` to `path` atomically; the robot is named after the file stem.
 pub fn write_urdf(design: &Design, path: &Path) -> Result<()> {
+    crate::io::write_atomic(path, urdf_text(design, path).as_bytes())
+}
+
+/// The text [`write_urdf`] writes to `path`, for a caller that writes it with others
+/// ([`crate::io::Staged`]).
+pub fn urdf_text(design: &Design, path: &Path) -> String {
     let name = path
         .file_stem()
         .and_then(|s| s.to_str())
         .filter(|s| !s.is_empty())
         .unwrap_or("kinsynth_robot");
-    crate::io::write_atomic(path, design_to_urdf_string(design, name).as_bytes())
+    design_to_urdf_string(design, name)
 }
 
 #[cfg(test)]
