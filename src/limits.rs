@@ -88,6 +88,16 @@ pub fn node_cap(axes: usize) -> usize {
 /// that reaches it stops, as at its iteration budget.
 pub const MAX_CCD_CASTS: u64 = 3_000_000;
 
+/// Most body tests one planner run may make: each node or edge check tests every robot body
+/// against the environment and every checked self pair, so a run costs its checks times the
+/// bodies and pairs, which grow with the square of a URDF robot's `<collision>` elements
+/// (960 boxes: 460,000 pairs) and which the iteration limits do not see. Counted as checks
+/// times (bodies + checked pairs). The largest paper-3d design (16 bodies, 91 pairs) would
+/// need 37 million checks to reach it, far beyond what the iteration limits allow; 960 boxes
+/// reach it after about 8,700 checks. A run that reaches it stops, as at its iteration
+/// budget.
+pub const MAX_BODY_TESTS: u64 = 4_000_000_000;
+
 /// Most random configurations sampled for the allowed-collision matrix
 /// (`robot.self_collision_samples`; MoveIt's setup assistant offers up to 100,000).
 pub const MAX_SELF_COLLISION_SAMPLES: usize = 100_000;

@@ -333,6 +333,13 @@ fn plan(
                     crate::limits::node_cap(chain.dof()),
                     chain.dof()
                 )
+            } else if growth.tests_limited {
+                format!(
+                    "{} iterations, stopped at the checker's work limit of {} body tests per run ({} per check: each body and checked self pair)",
+                    growth.iterations,
+                    crate::limits::MAX_BODY_TESTS,
+                    body.len() + body.self_pairs().len()
+                )
             } else {
                 format!("{} iterations", growth.iterations)
             };

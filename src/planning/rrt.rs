@@ -325,6 +325,9 @@ pub struct Growth {
     /// True when the run stopped because its trees held [`crate::limits::node_cap`] nodes
     /// (before the iteration budget).
     pub node_limited: bool,
+    /// True when the run stopped because its checks reached [`crate::limits::MAX_BODY_TESTS`]
+    /// body tests (before the iteration budget).
+    pub tests_limited: bool,
 }
 
 impl Growth {
@@ -339,6 +342,7 @@ impl Growth {
             home_blocked: true,
             work_limited: false,
             node_limited: false,
+            tests_limited: false,
         }
     }
 }
@@ -423,6 +427,8 @@ pub struct Rrt<'a> {
     cast_cap: u64,
     /// Most nodes of the run's trees together ([`crate::limits::node_cap`]).
     node_cap: usize,
+    /// Most body tests per run ([`crate::limits::MAX_BODY_TESTS`]).
+    tests_cap: u64,
 }
 
 impl<'a> Rrt<'a> {
@@ -442,6 +448,7 @@ impl<'a> Rrt<'a> {
             orientations: &[],
             cast_cap: crate::limits::MAX_CCD_CASTS,
             node_cap: crate::limits::node_cap(chain.dof()),
+            tests_cap: crate::limits::MAX_BODY_TESTS,
         }
     }
 
@@ -456,6 +463,13 @@ impl<'a> Rrt<'a> {
     #[cfg(test)]
     fn with_node_cap(mut self, cap: usize) -> Self {
         self.node_cap = cap;
+        self
+    }
+
+    /// The same planner with another cap on its body tests (tests).
+    #[cfg(test)]
+    fn with_tests_cap(mut self, cap: u64) -> Self {
+        self.tests_cap = cap;
         self
     }
 
@@ -851,6 +865,7 @@ impl<'a> Rrt<'a> {
                 home_blocked: true,
                 work_limited: false,
                 node_limited: false,
+                tests_limited: false,
             };
         }
         chain.fk(&home, &mut s.work.frames);
@@ -868,6 +883,11 @@ impl<'a> Rrt<'a> {
         let mut work_limited = false;
         let mut node_limited = false;
         let node_cap = self.node_cap;
+        // Every node or edge check tests each body and each checked self pair.
+        let mut tests_limited = false;
+        let per_check = (scratch.body.len() + scratch.body.self_pairs().len()).max(1) as u64;
+        let check_cap = self.tests_cap / per_check;
+        let checks_before = scratch.stats.nodes + scratch.stats.edges;
         while s
             .reached
             .iter()
@@ -893,6 +913,10 @@ impl<'a> Rrt<'a> {
             // nearest node scans a tree: the nodes are capped too.
             if s.tree.len() + s.goals.iter().map(|g| g.tree.len()).sum::<usize>() >= node_cap {
                 node_limited = true;
+                break;
+            }
+            if scratch.stats.nodes + scratch.stats.edges - checks_before >= check_cap {
+                tests_limited = true;
                 break;
             }
             iterations += 1;
@@ -924,6 +948,7 @@ impl<'a> Rrt<'a> {
             home_blocked: false,
             work_limited,
             node_limited,
+            tests_limited,
         }
     }
 }
@@ -1231,6 +1256,47 @@ mod tests {
         assert!(plain.tree.len() < 1_000, "{}", plain.tree.len());
         assert_eq!(crate::limits::node_cap(24), crate::limits::MAX_TREE_NODES);
         assert_eq!(crate::limits::node_cap(384), 6_250);
+    }
+
+    /// The body tests are capped: with a cap of 100 checks' tests (bodies and checked self
+    /// pairs per check), a run toward a task inside an obstacle stops after about 100 node
+    /// and edge checks (the cap is checked before each iteration, whose extensions may check
+    /// up to [`CONNECT_STEPS`] edges) and says so; with the real cap it spends its budget.
+    #[test]
+    fn the_body_tests_are_capped() {
+        use crate::collision::{make_checker, BodyModel, CheckerKind, CollisionScene};
+        use std::sync::Arc;
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("examples/scenarios/paper-2d.toml");
+        let s = crate::Scenario::load(&path).unwrap();
+        let chain = s.space.largest().chain();
+        let scene = Arc::new(CollisionScene::new(&s.workspace));
+        let t = s.workspace.obstacles[0].pose().translation;
+        let tasks = [Point3::new(t.x, t.y, t.z)];
+        let checker = make_checker(CheckerKind::Certified, scene, BodyModel::Capsules);
+        let mut config = s.planner.clone();
+        config.max_iterations = 300;
+        config.budget_growth = 1;
+        let run = |cap: u64| {
+            let mut scratch = Scratch::new(&chain);
+            let per_check = (scratch.body.len() + scratch.body.self_pairs().len()) as u64;
+            let rrt =
+                Rrt::new(&chain, checker.as_ref(), &config, &tasks).with_tests_cap(cap * per_check);
+            let mut rng = rand::SeedableRng::seed_from_u64(4);
+            let growth = rrt.grow(&mut rng, &mut scratch);
+            (growth, scratch.stats.nodes + scratch.stats.edges)
+        };
+        let (whole, checks) = run(crate::limits::MAX_BODY_TESTS);
+        assert!(!whole.tests_limited);
+        assert_eq!(whole.iterations, 300);
+        assert!(checks > 200, "{checks}");
+        let (capped, checks) = run(100);
+        assert!(capped.tests_limited);
+        assert!(capped.iterations < 300, "{}", capped.iterations);
+        assert!(
+            (100..100 + 2 * CONNECT_STEPS as u64).contains(&checks),
+            "{checks}"
+        );
     }
 
     /// Every node lies within the axis ranges, to the last bit, also where the ranges' limits
