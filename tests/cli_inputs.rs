@@ -1806,3 +1806,49 @@ fn a_refused_output_leaves_the_others_unwritten() {
     assert!(json.is_file() && srdf.is_file());
     assert_eq!(std::fs::read_dir(&traj).unwrap().count(), 20);
 }
+
+/// `urdf` names the robot once for the URDF and the SRDF (MoveIt refuses an SRDF that names
+/// another robot): after the URDF file, also with an SRDF elsewhere; with the URDF going to
+/// a pipe, after the SRDF file, else `robot` (not `stdout`).
+#[cfg(unix)]
+#[test]
+fn the_urdf_and_its_srdf_name_the_same_robot() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = write(dir.path(), "d.json", &design("0.3", "[-1, 1]", 2));
+    let named = |text: &str| -> String {
+        let at = text.find("<robot name=\"").expect("a robot element") + 13;
+        text[at..at + text[at..].find('"').unwrap()].to_string()
+    };
+    let (urdf, other) = (dir.path().join("arm.urdf"), dir.path().join("other.srdf"));
+    let args: [&OsStr; 6] = [
+        "urdf".as_ref(),
+        d.as_os_str(),
+        "-o".as_ref(),
+        urdf.as_os_str(),
+        "--srdf".as_ref(),
+        other.as_os_str(),
+    ];
+    let (code, stderr) = run(&args);
+    assert_eq!(code, Some(0), "{stderr}");
+    assert_eq!(named(&std::fs::read_to_string(&urdf).unwrap()), "arm");
+    assert_eq!(named(&std::fs::read_to_string(&other).unwrap()), "arm");
+    let piped = |extra: &[&OsStr]| {
+        let out = Command::new(BIN)
+            .args([
+                "urdf".as_ref(),
+                d.as_os_str(),
+                "-o".as_ref(),
+                "/dev/stdout".as_ref(),
+            ])
+            .args(extra)
+            .stdin(Stdio::null())
+            .output()
+            .unwrap();
+        assert!(out.status.success());
+        named(&String::from_utf8_lossy(&out.stdout))
+    };
+    assert_eq!(piped(&[]), "robot");
+    let srdf = dir.path().join("cell_arm.srdf");
+    assert_eq!(piped(&["--srdf".as_ref(), srdf.as_os_str()]), "cell_arm");
+    assert_eq!(named(&std::fs::read_to_string(&srdf).unwrap()), "cell_arm");
+}

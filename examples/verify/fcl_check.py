@@ -42,9 +42,12 @@ import sys
 import tomllib
 import xml.etree.ElementTree as ET
 
-import coal
-import numpy as np
-import pinocchio as pin
+try:
+    import coal
+    import numpy as np
+    import pinocchio as pin
+except ImportError as e:
+    sys.exit(f"fcl_check.py: {e}: needs the Python packages pin coal (pip install pin coal)")
 
 
 def rotation(o):

@@ -45,8 +45,12 @@ import sys
 import time
 import tomllib
 
-import numpy as np
-import pinocchio as pin
+try:
+    import numpy as np
+    import ompl  # noqa: F401  (used in the planning functions)
+    import pinocchio as pin
+except ImportError as e:
+    sys.exit(f"ompl_check.py: {e}: needs the Python packages pin coal ompl (pip install pin coal ompl)")
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from fcl_check import (  # noqa: E402

@@ -140,9 +140,13 @@ fn job(args: &Args, islands: Option<usize>, comm: &dyn Comm) -> Result<(), JobEr
         let g = timings.generations.max(1) as f64;
         let m = timings.migrations.max(1) as f64;
         say!(
-            "{} over {}, migration every {} generations ({} designs); best before the re-check from island {}; per generation {:.2} ms of status exchange, per migration {:.2} ms (after {:.2} ms waiting for the slowest island)",
+            "{} {}, migration every {} generations ({} designs); best before the re-check from island {}; per generation {:.2} ms of status exchange, per migration {:.2} ms (after {:.2} ms waiting for the slowest island)",
             count(spec.islands, "island"),
-            count(comm.size(), "MPI rank"),
+            if comm.size() == 1 {
+                "in one process".to_string()
+            } else {
+                format!("over {}", count(comm.size(), "MPI rank"))
+            },
             spec.migration.interval,
             spec.migration.count,
             summary.islands.as_ref().map_or(0, |i| i.best_island),

@@ -11,7 +11,9 @@ use std::path::PathBuf;
 pub struct Args {
     /// The design JSON, or an optimiser's best.json.
     pub design: PathBuf,
-    /// Output URDF file (written atomically); the robot is named after its stem.
+    /// Output URDF file (written atomically); the robot is named after its stem (when it is a
+    /// device or a pipe such as /dev/stdout: after the --srdf file's stem, else `robot`), in
+    /// the URDF and in the SRDF alike.
     #[arg(short, long)]
     pub output: PathBuf,
     /// Output SRDF file. Default: beside the URDF, its name with the extension .srdf; none
@@ -95,14 +97,24 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
     }
     // Both files are staged, then put in place together: an error writing one (a full disk,
     // a device that refuses) leaves neither written.
+    // One robot name for both (MoveIt refuses an SRDF that names another robot than its
+    // URDF): the URDF file's stem, else (the URDF goes to a device or a pipe) the SRDF file's,
+    // else `robot`.
+    let stem = |p: &std::path::Path| {
+        p.file_stem()
+            .and_then(|s| s.to_str())
+            .filter(|s| !s.is_empty())
+            .map(str::to_string)
+    };
+    let name = if special { None } else { stem(&output) }
+        .or_else(|| srdf.as_deref().and_then(stem))
+        .unwrap_or_else(|| "robot".to_string());
     let mut staged = kinsynth::io::Staged::default();
-    staged.add(
-        &output,
-        kinsynth::export::urdf::urdf_text(&d, &output).as_bytes(),
-    )?;
+    let text = kinsynth::export::urdf::design_to_urdf_string(&d, &name);
+    staged.add(&output, text.as_bytes())?;
     let body = kinsynth::collision::RobotBody::capsules(&d.chain(), &config);
     if let Some(srdf) = &srdf {
-        let text = kinsynth::export::srdf::body_srdf_text(&body, None, None, srdf);
+        let text = kinsynth::export::srdf::body_srdf_text(&body, None, Some(&name), srdf);
         staged.add(srdf, text.as_bytes())?;
     }
     staged.commit()?;

@@ -491,7 +491,10 @@ pub fn merge(dirs: &[std::path::PathBuf], out: &Path) -> Result<Vec<RunRecord>> 
     if let Some(w) = owner.iter().position(Option::is_none) {
         return Err(crate::Error::invalid(
             "DIR",
-            format!("{} folders", dirs.len()),
+            match dirs.len() {
+                1 => "1 folder".to_string(),
+                n => format!("{n} folders"),
+            },
             format!(
                 "workspace {w} of {} is in none of them (a slice is missing)",
                 spec.runs
