@@ -32,6 +32,18 @@ pub trait Problem: Sync {
     /// Cost of `x` (to minimise) and the reachability it reached (1 for problems without one).
     /// `progress` ∈ [0, 1] is how far the optimisation is (for schedules).
     fn evaluate(&self, x: &[f64], stream: u64, progress: f64) -> (f64, f64);
+    /// [`Problem::evaluate`], given up (`None`) once `stop` is raised, for problems whose
+    /// evaluations take long (the default evaluates whole).
+    fn evaluate_until(
+        &self,
+        x: &[f64],
+        stream: u64,
+        progress: f64,
+        stop: &AtomicBool,
+    ) -> Option<(f64, f64)> {
+        let _ = stop;
+        Some(self.evaluate(x, stream, progress))
+    }
     /// Dimension.
     fn dim(&self) -> usize {
         self.lower().len()
@@ -65,7 +77,8 @@ impl Evaluated {
 /// is 1 for one population; island `i` of `N` uses the streams `≡ i (mod N)`).
 ///
 /// A point whose evaluation has not begun when the `cutoff` is reached (the time is up, or the
-/// run is told to stop) is skipped; the first point is always evaluated, so that every step
+/// run is told to stop) is skipped, and once the run is told to stop the evaluations under way
+/// are given up too ([`Problem::evaluate_until`]); the first point is always evaluated, so that every step
 /// evaluates something, unless the cutoff allows a step without any ([`Cutoff::may_skip_all`]). Points past the cutoff's evaluation budget are skipped too (by their
 /// place in the batch, so which ones does not depend on timing). The batch is then [`Cut`],
 /// with the points that were evaluated, and the step that asked for it leaves its result to
@@ -88,7 +101,12 @@ pub fn evaluate_batch(
                 return None;
             }
             let stream = first_stream.wrapping_add((i as u64).wrapping_mul(stride));
-            let (cost, reachability) = problem.evaluate(&x, stream, progress);
+            // A raised flag (Ctrl-C) also gives up the evaluations under way, but the one a
+            // step always makes.
+            let (cost, reachability) = match cutoff.stop {
+                Some(stop) if !always => problem.evaluate_until(&x, stream, progress, stop)?,
+                _ => problem.evaluate(&x, stream, progress),
+            };
             Some(Evaluated {
                 x,
                 cost,

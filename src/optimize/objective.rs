@@ -9,6 +9,7 @@ use crate::planning::{PlannerConfig, ReachReport};
 use crate::scenario::{ObjectiveWeights, Scenario};
 use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
+use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
 /// The terms of Eq. 23 for one design.
@@ -195,6 +196,31 @@ impl Objective {
         (report, b)
     }
 
+    /// [`Objective::plan_design`], given up (`None`) once `stop` is raised.
+    fn plan_design_until(
+        &self,
+        d: &Prepared,
+        stream: u64,
+        progress: f64,
+        stop: Option<&AtomicBool>,
+    ) -> Option<(ReachReport, Breakdown)> {
+        let Some(stop) = stop else {
+            return Some(self.plan_design(d, stream, progress));
+        };
+        let report = crate::planning::reachability_until(
+            &d.chain,
+            Some(d.body.clone()),
+            &self.scene,
+            &self.tasks,
+            &self.orientations,
+            &self.planner_at(progress),
+            (self.seed, stream),
+            stop,
+        )?;
+        let b = breakdown(&d.design, report.reachability, &self.weights);
+        Some((report, b))
+    }
+
     /// As [`Objective::plan_once`]'s report, with the planner's tree kept for drawing
     /// ([`crate::planning::reach::reachability_with_tree`]).
     pub fn plan_with_tree(&self, x: &[f64], stream: u64, progress: f64) -> ReachReport {
@@ -215,8 +241,22 @@ impl Objective {
     /// Evaluates `x` as the optimisers do: one planner run on `stream`, and when it reaches
     /// every task, the confirmation runs; the first of them that falls short sets `R`.
     pub fn evaluate_confirmed(&self, x: &[f64], stream: u64, progress: f64) -> Evaluation {
+        self.evaluate_confirmed_until(x, stream, progress, None)
+            .expect("an evaluation without a stop flag ends whole")
+    }
+
+    /// [`Objective::evaluate_confirmed`], given up (`None`) once `stop` is raised: a planner
+    /// run then stops before its next iteration, and the evaluation would not be the one of
+    /// whole runs.
+    pub fn evaluate_confirmed_until(
+        &self,
+        x: &[f64],
+        stream: u64,
+        progress: f64,
+        stop: Option<&AtomicBool>,
+    ) -> Option<Evaluation> {
         let prepared = self.prepare(x);
-        let (mut report, mut b) = self.plan_design(&prepared, stream, progress);
+        let (mut report, mut b) = self.plan_design_until(&prepared, stream, progress, stop)?;
         let mut worst = stream;
         let mut planner_runs = 1;
         if report.reachability >= 1.0 {
@@ -224,7 +264,7 @@ impl Objective {
                 let s = CONFIRM_STREAM
                     .wrapping_add(stream.wrapping_mul(self.confirm as u64))
                     .wrapping_add(j);
-                let (r, rb) = self.plan_design(&prepared, s, progress);
+                let (r, rb) = self.plan_design_until(&prepared, s, progress, stop)?;
                 planner_runs += 1;
                 if r.reachability < report.reachability {
                     (report, b, worst) = (r, rb, s);
@@ -232,12 +272,12 @@ impl Objective {
                 }
             }
         }
-        Evaluation {
+        Some(Evaluation {
             report,
             stream: worst,
             planner_runs,
             breakdown: b,
-        }
+        })
     }
 
     /// The design space.
@@ -274,6 +314,18 @@ impl Problem for Objective {
         let b = self.evaluate_confirmed(x, stream, progress).breakdown;
         (b.cost, b.reachability)
     }
+    fn evaluate_until(
+        &self,
+        x: &[f64],
+        stream: u64,
+        progress: f64,
+        stop: &AtomicBool,
+    ) -> Option<(f64, f64)> {
+        let b = self
+            .evaluate_confirmed_until(x, stream, progress, Some(stop))?
+            .breakdown;
+        Some((b.cost, b.reachability))
+    }
 }
 
 #[cfg(test)]
@@ -307,6 +359,39 @@ mod tests {
                 },
             ],
             tool: None,
+        }
+    }
+
+    /// An evaluation given a stop flag is the evaluation without one while the flag is down,
+    /// and is given up (`None`) once it is raised (a planner run stops before its next
+    /// iteration, so an evaluation under way at Ctrl-C ends at once); as a [`Problem`], too.
+    #[test]
+    fn an_evaluation_is_given_up_once_the_stop_flag_is_raised() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("examples/scenarios/paper-2d.toml");
+        let s = Scenario::load(&path).unwrap();
+        let o = Objective::new(&s, s.planner.clone(), 7).with_confirmation(2);
+        let x = o.space().encode(&o.space().largest());
+        let (down, up) = (AtomicBool::new(false), AtomicBool::new(true));
+        for stream in 0..4 {
+            let whole = o.evaluate_confirmed(&x, stream, 0.0);
+            let watched = o
+                .evaluate_confirmed_until(&x, stream, 0.0, Some(&down))
+                .unwrap();
+            assert_eq!(watched.breakdown, whole.breakdown);
+            assert_eq!(
+                (watched.stream, watched.planner_runs),
+                (whole.stream, whole.planner_runs)
+            );
+            assert!(o
+                .evaluate_confirmed_until(&x, stream, 0.0, Some(&up))
+                .is_none());
+            let b = whole.breakdown;
+            assert_eq!(
+                o.evaluate_until(&x, stream, 0.0, &down),
+                Some((b.cost, b.reachability))
+            );
+            assert_eq!(o.evaluate_until(&x, stream, 0.0, &up), None);
         }
     }
 

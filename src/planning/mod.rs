@@ -10,5 +10,7 @@ pub mod rrt;
 pub mod schedule;
 
 pub use config::PlannerConfig;
-pub use reach::{reachability, reachability_tasks, PathReport, ReachReport, TargetReport};
+pub use reach::{
+    reachability, reachability_tasks, reachability_until, PathReport, ReachReport, TargetReport,
+};
 pub use schedule::Schedule;

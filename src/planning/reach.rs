@@ -10,6 +10,7 @@ use nalgebra::Point3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
+use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
 /// A joint-space path, keyed by joint names so it replays on the exported URDF.
@@ -253,6 +254,34 @@ pub fn reachability_tasks(
         config,
         (seed, stream),
         false,
+        None,
+    )
+    .expect("a run without an interrupt flag ends whole")
+}
+
+/// As [`reachability_tasks`], stopped before the planner's next iteration once `interrupt` is
+/// raised (a user's stop signal): `None` then, since the report would not be the one of a
+/// whole run.
+#[allow(clippy::too_many_arguments)]
+pub fn reachability_until(
+    chain: &Chain,
+    body: Option<Arc<RobotBody>>,
+    scene: &Arc<CollisionScene>,
+    tasks: &[Point3<f64>],
+    orientations: &[TaskOrientation],
+    config: &PlannerConfig,
+    (seed, stream): (u64, u64),
+    interrupt: &AtomicBool,
+) -> Option<ReachReport> {
+    plan(
+        chain,
+        body,
+        scene,
+        (tasks, orientations),
+        config,
+        (seed, stream),
+        false,
+        Some(interrupt),
     )
 }
 
@@ -277,9 +306,12 @@ pub fn reachability_with_tree(
         config,
         (seed, stream),
         true,
+        None,
     )
+    .expect("a run without an interrupt flag ends whole")
 }
 
+#[allow(clippy::too_many_arguments)]
 fn plan(
     chain: &Chain,
     body: Option<Arc<RobotBody>>,
@@ -288,7 +320,8 @@ fn plan(
     config: &PlannerConfig,
     (seed, stream): (u64, u64),
     keep_tree: bool,
-) -> ReachReport {
+    interrupt: Option<&AtomicBool>,
+) -> Option<ReachReport> {
     let body = body.unwrap_or_else(|| Arc::new(RobotBody::capsules(chain, &config.self_collision)));
     let checker = make_checker(config.checker, scene.clone(), config.body);
     let mut scratch = Scratch::with_body(chain, body.clone());
@@ -297,10 +330,16 @@ fn plan(
     let growth = if folded {
         super::rrt::Growth::blocked(chain, tasks.len())
     } else {
-        Rrt::new(chain, checker.as_ref(), config, tasks)
-            .with_orientations(orientations)
-            .grow(&mut rng, &mut scratch)
+        let rrt = Rrt::new(chain, checker.as_ref(), config, tasks).with_orientations(orientations);
+        match interrupt {
+            Some(flag) => rrt.with_interrupt(flag),
+            None => rrt,
+        }
+        .grow(&mut rng, &mut scratch)
     };
+    if growth.interrupted {
+        return None;
+    }
     let names = chain.joint_names();
     let tree = &growth.tree;
     let mut home_frames = chain.frames();
@@ -394,7 +433,7 @@ fn plan(
         })
         .collect();
     let reached = targets.iter().filter(|t| t.reached).count();
-    ReachReport {
+    Some(ReachReport {
         reachability: if tasks.is_empty() {
             0.0
         } else {
@@ -421,5 +460,5 @@ fn plan(
                 .collect(),
             parents: (0..tree.len() as u32).map(|n| tree.parent(n)).collect(),
         }),
-    }
+    })
 }

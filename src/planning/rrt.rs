@@ -12,6 +12,7 @@ use nalgebra::{Matrix3, Point3};
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 use std::collections::HashSet;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 /// Greedy steps toward an inverse-kinematics goal in one goal-biased iteration, and toward the
@@ -328,6 +329,9 @@ pub struct Growth {
     /// True when the run stopped because its checks reached [`crate::limits::MAX_BODY_TESTS`]
     /// body tests (before the iteration budget).
     pub tests_limited: bool,
+    /// True when the run was told to stop ([`Rrt::with_interrupt`]) before it ended: its
+    /// result is not the one of a whole run.
+    pub interrupted: bool,
 }
 
 impl Growth {
@@ -343,6 +347,7 @@ impl Growth {
             work_limited: false,
             node_limited: false,
             tests_limited: false,
+            interrupted: false,
         }
     }
 }
@@ -429,6 +434,8 @@ pub struct Rrt<'a> {
     node_cap: usize,
     /// Most body tests per run ([`crate::limits::MAX_BODY_TESTS`]).
     tests_cap: u64,
+    /// Raised to stop the run before its next iteration ([`Rrt::with_interrupt`]).
+    interrupt: Option<&'a AtomicBool>,
 }
 
 impl<'a> Rrt<'a> {
@@ -449,6 +456,7 @@ impl<'a> Rrt<'a> {
             cast_cap: crate::limits::MAX_CCD_CASTS,
             node_cap: crate::limits::node_cap(chain.dof()),
             tests_cap: crate::limits::MAX_BODY_TESTS,
+            interrupt: None,
         }
     }
 
@@ -463,6 +471,13 @@ impl<'a> Rrt<'a> {
     #[cfg(test)]
     fn with_node_cap(mut self, cap: usize) -> Self {
         self.node_cap = cap;
+        self
+    }
+
+    /// The same planner, stopped before its next iteration once `flag` is raised (a user's
+    /// stop signal): the run then reports [`Growth::interrupted`].
+    pub fn with_interrupt(mut self, flag: &'a AtomicBool) -> Self {
+        self.interrupt = Some(flag);
         self
     }
 
@@ -866,6 +881,7 @@ impl<'a> Rrt<'a> {
                 work_limited: false,
                 node_limited: false,
                 tests_limited: false,
+                interrupted: false,
             };
         }
         chain.fk(&home, &mut s.work.frames);
@@ -888,6 +904,7 @@ impl<'a> Rrt<'a> {
         let per_check = (scratch.body.len() + scratch.body.self_pairs().len()).max(1) as u64;
         let check_cap = self.tests_cap / per_check;
         let checks_before = scratch.stats.nodes + scratch.stats.edges;
+        let mut interrupted = false;
         while s
             .reached
             .iter()
@@ -917,6 +934,10 @@ impl<'a> Rrt<'a> {
             }
             if scratch.stats.nodes + scratch.stats.edges - checks_before >= check_cap {
                 tests_limited = true;
+                break;
+            }
+            if self.interrupt.is_some_and(|f| f.load(Ordering::Relaxed)) {
+                interrupted = true;
                 break;
             }
             iterations += 1;
@@ -949,6 +970,7 @@ impl<'a> Rrt<'a> {
             work_limited,
             node_limited,
             tests_limited,
+            interrupted,
         }
     }
 }
