@@ -182,18 +182,8 @@ impl Objective {
         stream: u64,
         progress: f64,
     ) -> (ReachReport, Breakdown) {
-        let report = crate::planning::reachability_tasks(
-            &d.chain,
-            Some(d.body.clone()),
-            &self.scene,
-            &self.tasks,
-            &self.orientations,
-            &self.planner_at(progress),
-            self.seed,
-            stream,
-        );
-        let b = breakdown(&d.design, report.reachability, &self.weights);
-        (report, b)
+        self.plan_design_until(d, stream, progress, None)
+            .expect("a run without a stop flag ends whole")
     }
 
     /// [`Objective::plan_design`], given up (`None`) once `stop` is raised.
@@ -204,15 +194,11 @@ impl Objective {
         progress: f64,
         stop: Option<&AtomicBool>,
     ) -> Option<(ReachReport, Breakdown)> {
-        let Some(stop) = stop else {
-            return Some(self.plan_design(d, stream, progress));
-        };
         let report = crate::planning::reachability_until(
             &d.chain,
             Some(d.body.clone()),
             &self.scene,
-            &self.tasks,
-            &self.orientations,
+            (&self.tasks, &self.orientations),
             &self.planner_at(progress),
             (self.seed, stream),
             stop,

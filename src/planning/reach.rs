@@ -246,42 +246,32 @@ pub fn reachability_tasks(
     seed: u64,
     stream: u64,
 ) -> ReachReport {
-    plan(
-        chain,
-        body,
-        scene,
-        (tasks, orientations),
-        config,
-        (seed, stream),
-        false,
-        None,
-    )
-    .expect("a run without an interrupt flag ends whole")
+    let run = (tasks, orientations);
+    reachability_until(chain, body, scene, run, config, (seed, stream), None)
+        .expect("a run without an interrupt flag ends whole")
 }
 
-/// As [`reachability_tasks`], stopped before the planner's next iteration once `interrupt` is
-/// raised (a user's stop signal): `None` then, since the report would not be the one of a
-/// whole run.
-#[allow(clippy::too_many_arguments)]
+/// As [`reachability_tasks`] (the tasks with their orientations, the seed with the stream),
+/// stopped before the planner's next iteration once `interrupt` is raised (a user's stop
+/// signal): `None` then, since the report would not be the one of a whole run.
 pub fn reachability_until(
     chain: &Chain,
     body: Option<Arc<RobotBody>>,
     scene: &Arc<CollisionScene>,
-    tasks: &[Point3<f64>],
-    orientations: &[TaskOrientation],
+    tasks: (&[Point3<f64>], &[TaskOrientation]),
     config: &PlannerConfig,
     (seed, stream): (u64, u64),
-    interrupt: &AtomicBool,
+    interrupt: Option<&AtomicBool>,
 ) -> Option<ReachReport> {
     plan(
         chain,
         body,
         scene,
-        (tasks, orientations),
+        tasks,
         config,
         (seed, stream),
         false,
-        Some(interrupt),
+        interrupt,
     )
 }
 

@@ -1193,22 +1193,33 @@ mod tests {
         );
     }
 
+    /// The bundled paper-2d scenario, its largest design's chain, its collision scene and a
+    /// task out of reach of every collision-free posture (the centre of its first obstacle),
+    /// on which a run spends its whole budget.
+    fn task_inside_an_obstacle() -> (
+        crate::Scenario,
+        Chain,
+        std::sync::Arc<crate::collision::CollisionScene>,
+        [Point3<f64>; 1],
+    ) {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("examples/scenarios/paper-2d.toml");
+        let s = crate::Scenario::load(&path).unwrap();
+        let chain = s.space.largest().chain();
+        let scene = std::sync::Arc::new(crate::collision::CollisionScene::new(&s.workspace));
+        let t = s.workspace.obstacles[0].pose().translation;
+        let tasks = [Point3::new(t.x, t.y, t.z)];
+        (s, chain, scene, tasks)
+    }
+
     /// `ccd`'s work is capped: a run whose task lies inside an obstacle (so it would spend its
     /// whole budget) stops once its shape casts reach the cap, soon after (the cap is checked
     /// before each iteration, whose extensions may check several edges), and says so; with
     /// the real cap the same run spends its iteration budget.
     #[test]
     fn the_ccd_checkers_work_is_capped() {
-        use crate::collision::{make_checker, BodyModel, CheckerKind, CollisionScene};
-        use std::sync::Arc;
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("examples/scenarios/paper-2d.toml");
-        let s = crate::Scenario::load(&path).unwrap();
-        let chain = s.space.largest().chain();
-        let scene = Arc::new(CollisionScene::new(&s.workspace));
-        let t = s.workspace.obstacles[0].pose().translation;
-        let inside = Point3::new(t.x, t.y, t.z);
-        let tasks = [inside];
+        use crate::collision::{make_checker, BodyModel, CheckerKind};
+        let (s, chain, scene, tasks) = task_inside_an_obstacle();
         let mut config = s.planner.clone();
         config.checker = CheckerKind::Ccd;
         config.max_iterations = 300;
@@ -1243,16 +1254,8 @@ mod tests {
     /// the scenario's `lambda` spends its iteration budget without coming near the cap.
     #[test]
     fn the_trees_nodes_are_capped() {
-        use crate::collision::{make_checker, BodyModel, CheckerKind, CollisionScene};
-        use std::sync::Arc;
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("examples/scenarios/paper-2d.toml");
-        let s = crate::Scenario::load(&path).unwrap();
-        let chain = s.space.largest().chain();
-        let scene = Arc::new(CollisionScene::new(&s.workspace));
-        // A task out of reach of every collision-free posture: inside the first obstacle.
-        let t = s.workspace.obstacles[0].pose().translation;
-        let tasks = [Point3::new(t.x, t.y, t.z)];
+        use crate::collision::{make_checker, BodyModel, CheckerKind};
+        let (s, chain, scene, tasks) = task_inside_an_obstacle();
         let checker = make_checker(CheckerKind::Certified, scene, BodyModel::Capsules);
         let run = |lambda: f64| {
             let mut config = s.planner.clone();
@@ -1286,15 +1289,8 @@ mod tests {
     /// up to [`CONNECT_STEPS`] edges) and says so; with the real cap it spends its budget.
     #[test]
     fn the_body_tests_are_capped() {
-        use crate::collision::{make_checker, BodyModel, CheckerKind, CollisionScene};
-        use std::sync::Arc;
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("examples/scenarios/paper-2d.toml");
-        let s = crate::Scenario::load(&path).unwrap();
-        let chain = s.space.largest().chain();
-        let scene = Arc::new(CollisionScene::new(&s.workspace));
-        let t = s.workspace.obstacles[0].pose().translation;
-        let tasks = [Point3::new(t.x, t.y, t.z)];
+        use crate::collision::{make_checker, BodyModel, CheckerKind};
+        let (s, chain, scene, tasks) = task_inside_an_obstacle();
         let checker = make_checker(CheckerKind::Certified, scene, BodyModel::Capsules);
         let mut config = s.planner.clone();
         config.max_iterations = 300;
