@@ -1161,13 +1161,16 @@ impl<'a> Runner<'a> {
         drawn: &ReachReport,
         history: &[HistoryRow],
     ) -> Result<()> {
+        // Every result is staged, then all are put in place together: an error writing one
+        // (a full disk) leaves the folder's earlier results as they were.
+        let mut staged = crate::io::Staged::default();
         let best = serde_json::to_string_pretty(summary).expect("a summary serialises");
-        write_atomic(&self.out.join(files::BEST), best.as_bytes())?;
+        staged.add(&self.out.join(files::BEST), best.as_bytes())?;
         let time = serde_json::json!({
             "elapsed_s": summary.elapsed_s,
             "recheck_s": summary.recheck_s,
         });
-        write_atomic(
+        staged.add(
             &self.out.join(files::TIME),
             serde_json::to_string_pretty(&time)
                 .expect("numbers serialise")
@@ -1175,14 +1178,19 @@ impl<'a> Runner<'a> {
         )?;
         let reach = serde_json::to_string_pretty(&report.to_json_value(summary.stream))
             .expect("a report serialises");
-        write_atomic(&self.out.join(files::REACH), reach.as_bytes())?;
-        crate::export::write_urdf(&summary.design, &self.out.join(files::URDF))?;
-        crate::export::write_srdf(
-            &summary.design,
+        staged.add(&self.out.join(files::REACH), reach.as_bytes())?;
+        let urdf = self.out.join(files::URDF);
+        let text = crate::export::urdf::urdf_text(&summary.design, &urdf);
+        staged.add(&urdf, text.as_bytes())?;
+        let srdf = self.out.join(files::SRDF);
+        let checked = crate::collision::RobotBody::capsules(
+            &summary.design.chain(),
             &self.scenario.planner.self_collision,
-            &self.out.join(files::SRDF),
-        )?;
-        crate::export::trajectory::write_trajectories(report, &self.out.join(files::TRAJECTORIES))?;
+        );
+        let text = crate::export::srdf::body_srdf_text(&checked, None, None, &srdf);
+        staged.add(&srdf, text.as_bytes())?;
+        let trajectories = self.out.join(files::TRAJECTORIES);
+        crate::export::trajectory::stage_trajectories(report, &trajectories, &mut staged)?;
         let mut csv = String::from("elapsed_s,evaluations,best_cost,best_reachability\n");
         for r in history {
             csv.push_str(&format!(
@@ -1190,7 +1198,7 @@ impl<'a> Runner<'a> {
                 r.elapsed_s, r.evaluations, r.best_cost, r.best_reachability
             ));
         }
-        write_atomic(&self.out.join(files::HISTORY), csv.as_bytes())?;
+        staged.add(&self.out.join(files::HISTORY), csv.as_bytes())?;
         let svg = crate::export::plot::convergence_svg(
             &format!(
                 "{} — {} + {}",
@@ -1198,7 +1206,7 @@ impl<'a> Runner<'a> {
             ),
             history,
         );
-        write_atomic(&self.out.join(files::PLOT), svg.as_bytes())?;
+        staged.add(&self.out.join(files::PLOT), svg.as_bytes())?;
         let chain = summary.design.chain();
         let body = crate::collision::RobotBody::capsules(&chain, &summary.planner.self_collision);
         let view = crate::export::view::ViewInput {
@@ -1218,7 +1226,9 @@ impl<'a> Runner<'a> {
                 convergence_svg: Some(&svg),
             }),
         };
-        crate::export::view::write_report(&view, &self.out.join(files::REPORT))
+        let html = crate::export::view::report_html(&view);
+        staged.add(&self.out.join(files::REPORT), html.as_bytes())?;
+        staged.commit()
     }
 }
 
