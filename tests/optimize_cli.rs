@@ -300,3 +300,48 @@ fn a_new_run_in_a_used_folder_says_it_replaces_the_results() {
         );
     }
 }
+
+/// `optimize` puts its results in place together: when one cannot be written (here its SRDF,
+/// a link to `/dev/full`, as on a full disk), the run fails with a one-line error naming it
+/// and none of the other results is written (no `best.json`, no trajectories, no temporary
+/// file left), where the same run into an empty folder writes them all.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_result_that_cannot_be_written_leaves_the_others_unwritten() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    std::fs::create_dir(&out).unwrap();
+    std::os::unix::fs::symlink("/dev/full", out.join("robot.srdf")).unwrap();
+    let o = optimize(&out, &["--evaluations", "20", "--recheck-seeds", "1"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    let error: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error")).collect();
+    assert_eq!(error.len(), 1, "{stderr}");
+    assert!(
+        error[0].contains("robot.srdf") && error[0].contains("No space left"),
+        "{stderr}"
+    );
+    let mut left: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    left.sort();
+    // The checkpoint is written apart from the results (it lets the run be resumed).
+    assert_eq!(left, ["checkpoint.json", "robot.srdf"], "{stderr}");
+    std::fs::remove_file(out.join("robot.srdf")).unwrap();
+    let o = optimize(&out, &["--evaluations", "20", "--recheck-seeds", "1"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in [
+        "best.json",
+        "robot.urdf",
+        "robot.srdf",
+        "reach.json",
+        "report.html",
+    ] {
+        assert!(out.join(f).is_file(), "{f}");
+    }
+}

@@ -1161,6 +1161,24 @@ impl<'a> Runner<'a> {
         drawn: &ReachReport,
         history: &[HistoryRow],
     ) -> Result<()> {
+        // A trajectories folder this call creates is removed again if the results fail.
+        let trajectories = self.out.join(files::TRAJECTORIES);
+        let created = !trajectories.exists();
+        let written = self.stage_results(summary, report, drawn, history);
+        if written.is_err() && created {
+            let _ = std::fs::remove_dir(&trajectories); // only if still empty
+        }
+        written
+    }
+
+    /// [`Runner::write_results`]' work: every result staged, then all put in place.
+    fn stage_results(
+        &self,
+        summary: &RunSummary,
+        report: &ReachReport,
+        drawn: &ReachReport,
+        history: &[HistoryRow],
+    ) -> Result<()> {
         // Every result is staged, then all are put in place together: an error writing one
         // (a full disk) leaves the folder's earlier results as they were.
         let mut staged = crate::io::Staged::default();
