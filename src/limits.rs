@@ -98,6 +98,13 @@ pub const MAX_CCD_CASTS: u64 = 3_000_000;
 /// budget.
 pub const MAX_BODY_TESTS: u64 = 4_000_000_000;
 
+/// Most evaluations of the kinematics an edge checker makes in one planner run (`certified`'s
+/// bisection points): a body that moves along an obstacle at a tiny constant distance needs
+/// about its path length over that distance of them per edge, which the iteration limits do
+/// not see. Planner runs need about 7 per edge (paper-3d at π/4), so a run of 100,000
+/// iterations about a million. A run that reaches it stops, as at its iteration budget.
+pub const MAX_CHECK_FK: u64 = 20_000_000;
+
 /// Most random configurations sampled for the allowed-collision matrix
 /// (`robot.self_collision_samples`; MoveIt's setup assistant offers up to 100,000).
 pub const MAX_SELF_COLLISION_SAMPLES: usize = 100_000;

@@ -369,6 +369,12 @@ fn plan(
                     crate::limits::MAX_BODY_TESTS,
                     body.len() + body.self_pairs().len()
                 )
+            } else if growth.fk_limited {
+                format!(
+                    "{} iterations, stopped at the checker's work limit of {} kinematics evaluations per run",
+                    growth.iterations,
+                    crate::limits::MAX_CHECK_FK
+                )
             } else {
                 format!("{} iterations", growth.iterations)
             };

@@ -329,6 +329,9 @@ pub struct Growth {
     /// True when the run stopped because its checks reached [`crate::limits::MAX_BODY_TESTS`]
     /// body tests (before the iteration budget).
     pub tests_limited: bool,
+    /// True when the run stopped because its checker evaluated the kinematics
+    /// [`crate::limits::MAX_CHECK_FK`] times (before the iteration budget).
+    pub fk_limited: bool,
     /// True when the run was told to stop ([`Rrt::with_interrupt`]) before it ended: its
     /// result is not the one of a whole run.
     pub interrupted: bool,
@@ -347,6 +350,7 @@ impl Growth {
             work_limited: false,
             node_limited: false,
             tests_limited: false,
+            fk_limited: false,
             interrupted: false,
         }
     }
@@ -881,6 +885,7 @@ impl<'a> Rrt<'a> {
                 work_limited: false,
                 node_limited: false,
                 tests_limited: false,
+                fk_limited: false,
                 interrupted: false,
             };
         }
@@ -905,6 +910,7 @@ impl<'a> Rrt<'a> {
         let check_cap = self.tests_cap / per_check;
         let checks_before = scratch.stats.nodes + scratch.stats.edges;
         let mut interrupted = false;
+        let (mut fk_limited, fk_before) = (false, scratch.stats.fk);
         while s
             .reached
             .iter()
@@ -934,6 +940,10 @@ impl<'a> Rrt<'a> {
             }
             if scratch.stats.nodes + scratch.stats.edges - checks_before >= check_cap {
                 tests_limited = true;
+                break;
+            }
+            if scratch.stats.fk - fk_before >= crate::limits::MAX_CHECK_FK {
+                fk_limited = true;
                 break;
             }
             if self.interrupt.is_some_and(|f| f.load(Ordering::Relaxed)) {
@@ -970,6 +980,7 @@ impl<'a> Rrt<'a> {
             work_limited,
             node_limited,
             tests_limited,
+            fk_limited,
             interrupted,
         }
     }

@@ -38,7 +38,8 @@
 //! proven free on `[t0, t1]` when `c(t0) > 0`, `c(t1) > 0` and `c(t0) + c(t1) > (t1 − t0)·D`.
 //! Items not proven free are bisected; a clearance `≤ 0` at a bisection point is a real
 //! collision (the edge is blocked), and an interval still unproven after [`MAX_DEPTH`] halvings
-//! (a grazing contact) counts as blocked too. Every answer "free" is therefore a proof, up to
+//! (a grazing contact), or an edge still unproven after [`MAX_MIDPOINTS`] bisection points (a
+//! body moving along an obstacle at a tiny distance), counts as blocked too. Every answer "free" is therefore a proof, up to
 //! the accuracy of the distance queries (closed forms for spheres and capsules, parry's GJK
 //! otherwise).
 //!
@@ -72,6 +73,13 @@ use std::sync::Arc;
 
 /// Bisection depth after which an unproven interval (length `2^-MAX_DEPTH`) counts as blocked.
 pub const MAX_DEPTH: u32 = 30;
+
+/// Bisection points after which an edge still unproven counts as blocked: a body that moves
+/// along an obstacle at a tiny constant distance needs about its path length over that
+/// distance of them (0.6 m at a gap of 1e-7 m: six million), each an evaluation of the
+/// kinematics. Planner edges need a few (about 5 at π/4 on paper-3d); a run's evaluations
+/// are capped too ([`crate::limits::MAX_CHECK_FK`]).
+pub const MAX_MIDPOINTS: u32 = 1_000_000;
 
 /// `Item::other` of a body's clearance from the whole environment.
 const ENV: u32 = u32::MAX;
@@ -990,10 +998,16 @@ impl EdgeChecker for Certified {
             len: work.items.len(),
             depth: 0,
         });
+        let mut midpoints = 0;
         while let Some(iv) = work.stack.pop() {
-            if iv.depth >= MAX_DEPTH {
+            if iv.depth >= MAX_DEPTH || midpoints >= MAX_MIDPOINTS {
                 return false; // cannot be proven: count as blocked
             }
+            midpoints += 1;
+            // The items past this interval's belong to intervals already done (the stack's
+            // ranges rise towards its top): dropped, so that memory stays bounded by the
+            // depth however many intervals an edge takes.
+            work.items.truncate(iv.start + iv.len);
             let tm = 0.5 * (iv.t0 + iv.t1);
             for ((qi, a), d) in q.iter_mut().zip(from).zip(&work.delta) {
                 *qi = a + tm * d;
@@ -1017,7 +1031,7 @@ impl EdgeChecker for Certified {
             body.place_links(fm, pm, links);
             twists_upto(bounds, fm, &work.delta, &mut work.twist_m, levels);
             let half = 0.5 * (iv.t1 - iv.t0);
-            // Children: left [t0, tm] then right [tm, t1], appended after the parent's items.
+            // Children: left [t0, tm] and right [tm, t1], appended after the parent's items.
             // Per item: the clearance and speed at tm, and the children's motion bounds.
             work.mid.clear();
             pair_distances(
@@ -1059,27 +1073,29 @@ impl EdgeChecker for Certified {
                     hint,
                 });
             }
+            // The right child's items first, then the left's, which is checked first: the
+            // stack's item ranges rise towards its top.
             let parent = iv.start..iv.start + iv.len;
-            let left_start = work.items.len();
-            push_children(&mut work.items, parent.clone(), &work.mid, true);
             let right_start = work.items.len();
-            push_children(&mut work.items, parent, &work.mid, false);
+            push_children(&mut work.items, parent.clone(), &work.mid, false);
+            let left_start = work.items.len();
+            push_children(&mut work.items, parent, &work.mid, true);
             let end = work.items.len();
-            if end > right_start {
+            if left_start > right_start {
                 work.stack.push(Interval {
                     t0: tm,
                     t1: iv.t1,
                     start: right_start,
-                    len: end - right_start,
+                    len: left_start - right_start,
                     depth: iv.depth + 1,
                 });
             }
-            if right_start > left_start {
+            if end > left_start {
                 work.stack.push(Interval {
                     t0: iv.t0,
                     t1: tm,
                     start: left_start,
-                    len: right_start - left_start,
+                    len: end - left_start,
                     depth: iv.depth + 1,
                 });
             }
@@ -1093,6 +1109,53 @@ mod tests {
     use super::*;
     use crate::Scenario;
     use rand::{RngExt, SeedableRng};
+
+    /// A link turning along a sphere at a constant gap of 1e-8 m (its capsule tangent to a
+    /// sphere centred on the joint's axis) needs about a hundred million bisection points to
+    /// be proven free: the edge counts as blocked after [`MAX_MIDPOINTS`] of them, and the
+    /// items kept while bisecting stay within two children per level of depth (they grew with
+    /// every interval before: 2.4 GB for a run of 7 such edges).
+    #[test]
+    fn an_edge_along_an_obstacle_at_a_tiny_gap_is_bounded() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("tangent.toml");
+        let gap = 1e-8;
+        std::fs::write(
+            &path,
+            format!(
+                "[robot]\nlinks = 2\n[robot.uniform]\na = 0.5\n[[robot.link]]\nindex = 1\naxes.ry = {{ min = -3.1416, max = 3.1416 }}\n[[obstacle]]\nshape = \"sphere\"\nposition = [0.5, {}, 0.0]\nradius = 0.1\n[[task]]\npoint = [0.5, 0.0, 0.5]\n",
+                0.1 + 0.02 + gap
+            ),
+        )
+        .unwrap();
+        let s = Scenario::load(&path).unwrap();
+        let chain = s.space.largest().chain();
+        let scene = Arc::new(CollisionScene::new(&s.workspace));
+        let checker = Certified::new(scene);
+        let mut scratch = Scratch::new(&chain);
+        let (from, to) = (vec![0.0; chain.dof()], vec![3.0; chain.dof()]);
+        assert!(!checker.check_edge(&chain, &from, &to, None, &mut scratch));
+        let fk = scratch.stats.fk;
+        assert!(
+            fk > u64::from(MAX_MIDPOINTS) / 2 && fk <= u64::from(MAX_MIDPOINTS) + 2,
+            "{fk}"
+        );
+        let per_interval = scratch.body.len() + scratch.body.self_pairs().len();
+        let items = scratch.certified.items.len();
+        assert!(
+            items <= 2 * (MAX_DEPTH as usize + 1) * per_interval,
+            "{items} items"
+        );
+        // The same motion farther away (1 cm) is proven free in a few bisection points.
+        let far = path.with_file_name("far.toml");
+        let text = std::fs::read_to_string(&path).unwrap();
+        std::fs::write(&far, text.replace(&format!("{}", 0.1 + 0.02 + gap), "0.13")).unwrap();
+        let s = Scenario::load(&far).unwrap();
+        let checker = Certified::new(Arc::new(CollisionScene::new(&s.workspace)));
+        let mut scratch = Scratch::new(&chain);
+        assert!(checker.check_edge(&chain, &from, &to, None, &mut scratch));
+        assert!(scratch.stats.fk < 1_000, "{}", scratch.stats.fk);
+    }
 
     /// The motion bound holds: over a sub-interval `[t0, t1]` of a step, with the speeds at
     /// its two ends from the twists of the full configuration, no point of a body's core moves
