@@ -1852,3 +1852,41 @@ fn the_urdf_and_its_srdf_name_the_same_robot() {
     assert_eq!(piped(&["--srdf".as_ref(), srdf.as_os_str()]), "cell_arm");
     assert_eq!(named(&std::fs::read_to_string(&srdf).unwrap()), "cell_arm");
 }
+
+/// `edges` bounds its whole work, not only each argument: edges over all `L_max` values and
+/// oracle sub-steps over all edges are limited, each refusal one line naming the value.
+#[test]
+fn edges_bounds_the_product_of_its_counts() {
+    let cell = repo("examples/scenarios/paper-2d.toml");
+    let edges = |extra: &[&str]| {
+        let mut args: Vec<&OsStr> = vec!["edges".as_ref(), cell.as_os_str()];
+        args.extend(extra.iter().map(|a| OsStr::new(*a)));
+        args.into_iter()
+            .map(OsStr::to_os_string)
+            .collect::<Vec<_>>()
+    };
+    let a = edges(&["--count", "100000", "--substeps", "1", "--lmax", "0.1,0.2"]);
+    let a: Vec<&OsStr> = a.iter().map(|x| x.as_os_str()).collect();
+    rejected(
+        &a,
+        &[
+            "--count = 100000",
+            "200000 edges over 2 L_max values",
+            "100000",
+        ],
+    );
+    // Without --lmax, three values.
+    let a = edges(&["--count", "40000", "--substeps", "1"]);
+    let a: Vec<&OsStr> = a.iter().map(|x| x.as_os_str()).collect();
+    rejected(&a, &["--count = 40000", "120000 edges over 3 L_max values"]);
+    let a = edges(&["--count", "50000", "--substeps", "10000", "--lmax", "0.1"]);
+    let a: Vec<&OsStr> = a.iter().map(|x| x.as_os_str()).collect();
+    rejected(
+        &a,
+        &[
+            "--substeps = 10000",
+            "500000000 oracle sub-steps",
+            "200000000",
+        ],
+    );
+}

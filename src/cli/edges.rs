@@ -31,6 +31,12 @@ pub const MAX_LMAX_VALUES: usize = 16;
 pub const MAX_EDGES: usize = 100_000;
 /// Most oracle sub-steps per edge (`--substeps`).
 pub const MAX_SUBSTEPS: usize = 100_000;
+/// Most edges over all `L_max` values (`--count` times their number): `ccd` takes up to about
+/// 15 ms per edge, so this stands for about 25 minutes.
+pub const MAX_EDGES_TOTAL: usize = 100_000;
+/// Most oracle sub-steps over all edges (`--count` times `--substeps` times the `L_max`
+/// values), about 3 µs each: about 10 minutes.
+pub const MAX_SUBSTEPS_TOTAL: usize = 200_000_000;
 
 /// Runs the command.
 pub fn run(args: Args) -> Result<(), kinsynth::Error> {
@@ -64,6 +70,27 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
                 format!("must be a whole number from 1 to {max}"),
             ));
         }
+    }
+    let values = if lmax.is_empty() { 3 } else { lmax.len() }; // no --lmax: three values
+    let edges = count * values;
+    if edges > MAX_EDGES_TOTAL {
+        return Err(kinsynth::Error::invalid(
+            "--count",
+            count,
+            format!(
+                "{edges} edges over {values} L_max values, more than the limit of {MAX_EDGES_TOTAL} in one run"
+            ),
+        ));
+    }
+    if edges * substeps > MAX_SUBSTEPS_TOTAL {
+        return Err(kinsynth::Error::invalid(
+            "--substeps",
+            substeps,
+            format!(
+                "{} oracle sub-steps over {edges} edges, more than the limit of {MAX_SUBSTEPS_TOTAL} in one run",
+                edges * substeps
+            ),
+        ));
     }
     let s = Scenario::load(&file)?;
     let chain = s.space.largest().chain();
