@@ -15,6 +15,10 @@ pub const MAX_TEXT_FILE_BYTES: u64 = 16 << 20;
 pub const MAX_CHECKPOINT_BYTES: u64 = 64 << 20;
 /// Largest mesh file (STL or OBJ), in bytes (256 MiB: a binary STL of 5M triangles is 250 MB).
 pub const MAX_MESH_FILE_BYTES: u64 = 256 << 20;
+/// Largest COLLADA (`.dae`) mesh file, in bytes (64 MiB): its XML is read into a document
+/// tree of about 20 bytes per byte of file (a 256 MiB file took 5.25 GB, a 64 MiB one
+/// 1.3 GB).
+pub const MAX_COLLADA_FILE_BYTES: u64 = 64 << 20;
 /// Deepest XML element nesting accepted in a URDF or SRDF file (either needs about 5).
 pub const MAX_XML_DEPTH: usize = 64;
 /// Most `<collision>` elements of an imported URDF robot between its base and tip: each is a

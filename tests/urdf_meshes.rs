@@ -403,6 +403,24 @@ fn mesh_errors_name_the_urdf_the_link_and_the_file() {
         &["link 'link3'", "no_such_mesh.stl", "cannot read"],
     );
 
+    // A COLLADA file above its 64 MiB limit (sparse) is refused by its size, not read.
+    std::fs::File::create(d.join("big.dae"))
+        .unwrap()
+        .set_len((64 << 20) + 1)
+        .unwrap();
+    let big = variant(d, "big.urdf", "../../meshes/arm/link3.dae", "big.dae");
+    let err = reach_err(&["--urdf", big.to_str().unwrap(), "--package", &meshes]);
+    check(
+        &err,
+        &big,
+        &[
+            "link 'link3'",
+            "big.dae",
+            "67108865 bytes",
+            "limit of 67108864",
+        ],
+    );
+
     std::fs::write(d.join("empty.stl"), b"").unwrap();
     let empty = variant(d, "empty.urdf", "../../meshes/arm/link1.stl", "empty.stl");
     let err = reach_err(&["--urdf", empty.to_str().unwrap(), "--package", &meshes]);

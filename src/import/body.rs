@@ -1045,7 +1045,7 @@ fn catch_quietly<T>(f: impl FnOnce() -> T) -> std::result::Result<T, String> {
 /// [`check_collada`] and a count of its triangles against
 /// [`crate::limits::MAX_MESH_TRIANGLES`]; the reader is given no way to open another file.
 fn collada_corners(path: &Path) -> std::result::Result<Vec<(u32, [f64; 3])>, String> {
-    let bytes = crate::limits::read_file(path, crate::limits::MAX_MESH_FILE_BYTES)
+    let bytes = crate::limits::read_file(path, crate::limits::MAX_COLLADA_FILE_BYTES)
         .map_err(|e| format!("cannot read: {e}"))?;
     if bytes.is_empty() {
         return Err("empty file".into());
