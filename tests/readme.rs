@@ -134,6 +134,21 @@ fn limits_table_matches_the_constants() {
             grouped(MAX_POPULATION)
         ),
         format!("| other real settings | {:e} |", MAX_SETTING),
+        format!("| file size | {} | COLLADA", mib(MAX_COLLADA_FILE_BYTES)),
+        format!("| RRT tree nodes | {} |", grouped(MAX_TREE_NODES)),
+        format!(
+            "| body tests per planner run | {} |",
+            grouped(MAX_BODY_TESTS as usize)
+        ),
+        format!(
+            "| kinematics evaluations of the checker | {} per edge, {} per planner run |",
+            grouped(kinsynth::collision::edge::certified::MAX_MIDPOINTS as usize),
+            grouped(MAX_CHECK_FK as usize)
+        ),
+        format!(
+            "| planner seeds | {} |",
+            grouped(kinsynth::optimize::runner::MAX_SEEDS)
+        ),
     ] {
         assert!(text.contains(&row), "README lacks `{row}`");
     }
