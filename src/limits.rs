@@ -109,6 +109,39 @@ pub const MAX_BODY_TESTS: u64 = 4_000_000_000;
 /// iterations about a million. A run that reaches it stops, as at its iteration budget.
 pub const MAX_CHECK_FK: u64 = 20_000_000;
 
+/// Most designs' free variables a run's checkpoint holds: a GA's population or a swarm times
+/// the design space's free variables, over all islands of an island job. A swarm's state
+/// takes about 61 bytes per variable in `checkpoint.json` (positions, velocities and personal
+/// bests), so 500,000 stay within [`MAX_CHECKPOINT_BYTES`] with room for the history: a
+/// population of 10,000 over 1,024 free variables wrote 212 MB, which no resume could read.
+pub const MAX_POPULATION_VARIABLES: usize = 500_000;
+
+/// Refuses a run whose checkpoint would hold more than [`MAX_POPULATION_VARIABLES`]: `islands`
+/// populations of `population` designs of `variables` free variables each (ASA keeps a few
+/// designs whatever its batch: `population` is then 0).
+pub fn check_population_variables(
+    population: usize,
+    islands: usize,
+    variables: usize,
+) -> crate::error::Result<()> {
+    let total = population.saturating_mul(islands).saturating_mul(variables);
+    if total > MAX_POPULATION_VARIABLES {
+        let per = if islands > 1 {
+            format!(" in each of {islands} islands")
+        } else {
+            String::new()
+        };
+        return Err(crate::error::Error::invalid(
+            "optimizer.population",
+            population,
+            format!(
+                "{population} designs{per} of {variables} free variables make {total}, more than the limit of {MAX_POPULATION_VARIABLES} a checkpoint holds"
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// Most random configurations sampled for the allowed-collision matrix
 /// (`robot.self_collision_samples`; MoveIt's setup assistant offers up to 100,000).
 pub const MAX_SELF_COLLISION_SAMPLES: usize = 100_000;

@@ -345,3 +345,75 @@ fn a_result_that_cannot_be_written_leaves_the_others_unwritten() {
         assert!(out.join(f).is_file(), "{f}");
     }
 }
+
+/// A run whose checkpoint could not be read back is refused before it starts: a GA's
+/// population (or a swarm) times the design's free variables, over all islands, is limited
+/// (paper-3d has 56: 10,000 designs make 560,000, above the 500,000 a checkpoint holds), with
+/// one line naming the scenario, the field and the value; ASA, which keeps a few designs, runs.
+#[test]
+fn a_population_a_checkpoint_cannot_hold_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scenarios/paper-3d.toml"),
+    )
+    .unwrap();
+    assert!(text.contains("\npopulation = 32\n"));
+    let scenario = |population: usize| {
+        let p = dir.path().join(format!("p{population}.toml"));
+        let edited = text.replace(
+            "\npopulation = 32\n",
+            &format!("\npopulation = {population}\n"),
+        );
+        std::fs::write(&p, edited).unwrap();
+        p
+    };
+    let run = |s: &Path, extra: &[&str]| {
+        Command::new(BIN)
+            .arg("optimize")
+            .arg(s)
+            .args([
+                "--quiet",
+                "--evaluations",
+                "2",
+                "--recheck-seeds",
+                "0",
+                "--out",
+            ])
+            .arg(dir.path().join("out"))
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let refused = |o: std::process::Output, parts: &[&str]| {
+        let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert_eq!(o.status.code(), Some(1), "{stderr}");
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        for p in parts {
+            assert!(stderr.contains(p), "`{p}` missing from {stderr}");
+        }
+    };
+    let big = scenario(10_000);
+    refused(
+        run(&big, &[]),
+        &[
+            "p10000.toml",
+            "optimizer.population = 10000",
+            "56 free variables make 560000",
+            "500000",
+        ],
+    );
+    refused(run(&big, &["--optimizer", "pso"]), &["560000"]);
+    let half = scenario(5_000);
+    refused(
+        run(&half, &["--islands", "2"]),
+        &[
+            "optimizer.population = 5000",
+            "in each of 2 islands",
+            "560000",
+        ],
+    );
+    let o = run(&half, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = run(&big, &["--optimizer", "asa"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}

@@ -146,6 +146,10 @@ fn limits_table_matches_the_constants() {
             grouped(MAX_CHECK_FK as usize)
         ),
         format!(
+            "| population × free variables | {} |",
+            grouped(MAX_POPULATION_VARIABLES)
+        ),
+        format!(
             "| planner seeds | {} |",
             grouped(kinsynth::optimize::runner::MAX_SEEDS)
         ),

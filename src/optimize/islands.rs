@@ -629,6 +629,7 @@ impl<'r, 'a> IslandJob<'r, 'a> {
             })?;
         }
         let setup = runner.prepare(resume)?;
+        runner.check_population(n)?;
         if let Some(expected) = &self.scenario_hash {
             if *expected != setup.hash {
                 return Err(Error::invalid(

@@ -877,6 +877,17 @@ impl<'a> Runner<'a> {
         self.scenario
     }
 
+    /// Refuses a run of `islands` populations whose checkpoint could not be read back
+    /// ([`crate::limits::check_population_variables`]); the error names the scenario.
+    pub(crate) fn check_population(&self, islands: usize) -> Result<()> {
+        let population = match self.options.algorithm {
+            Algorithm::Ga | Algorithm::Pso => self.scenario.optimizer.population,
+            Algorithm::Asa => 0,
+        };
+        crate::limits::check_population_variables(population, islands, self.scenario.space.dim())
+            .map_err(|e| e.in_file(&self.scenario_path))
+    }
+
     /// Binds a checkpoint to the scenario (hash and shape),
     /// checks the settings and builds the objective.
     pub(crate) fn prepare(&self, resume: Option<&Checkpoint>) -> Result<Setup> {
@@ -901,6 +912,7 @@ impl<'a> Runner<'a> {
         self.options
             .validate_in(section)
             .map_err(|e| e.in_file(&checkpoint_path))?;
+        self.check_population(1)?;
         let objective = Objective::new(self.scenario, self.planner.clone(), self.options.seed)
             .with_confirmation(self.options.confirm_seeds);
         Ok(Setup {
