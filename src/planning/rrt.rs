@@ -438,6 +438,8 @@ pub struct Rrt<'a> {
     node_cap: usize,
     /// Most body tests per run ([`crate::limits::MAX_BODY_TESTS`]).
     tests_cap: u64,
+    /// Most kinematics evaluations of the checker per run ([`crate::limits::MAX_CHECK_FK`]).
+    fk_cap: u64,
     /// Raised to stop the run before its next iteration ([`Rrt::with_interrupt`]).
     interrupt: Option<&'a AtomicBool>,
 }
@@ -460,6 +462,7 @@ impl<'a> Rrt<'a> {
             cast_cap: crate::limits::MAX_CCD_CASTS,
             node_cap: crate::limits::node_cap(chain.dof()),
             tests_cap: crate::limits::MAX_BODY_TESTS,
+            fk_cap: crate::limits::MAX_CHECK_FK,
             interrupt: None,
         }
     }
@@ -482,6 +485,13 @@ impl<'a> Rrt<'a> {
     /// stop signal): the run then reports [`Growth::interrupted`].
     pub fn with_interrupt(mut self, flag: &'a AtomicBool) -> Self {
         self.interrupt = Some(flag);
+        self
+    }
+
+    /// The same planner with another cap on its checker's kinematics evaluations (tests).
+    #[cfg(test)]
+    fn with_fk_cap(mut self, cap: u64) -> Self {
+        self.fk_cap = cap;
         self
     }
 
@@ -942,7 +952,7 @@ impl<'a> Rrt<'a> {
                 tests_limited = true;
                 break;
             }
-            if scratch.stats.fk - fk_before >= crate::limits::MAX_CHECK_FK {
+            if scratch.stats.fk - fk_before >= self.fk_cap {
                 fk_limited = true;
                 break;
             }
@@ -1326,6 +1336,34 @@ mod tests {
             (100..100 + 2 * CONNECT_STEPS as u64).contains(&checks),
             "{checks}"
         );
+    }
+
+    /// The checker's kinematics evaluations are capped: with a cap of 100, a run toward a
+    /// task inside an obstacle stops soon after 100 (the cap is checked before each
+    /// iteration) and says so; with the real cap it spends its budget.
+    #[test]
+    fn the_checkers_kinematics_are_capped() {
+        use crate::collision::{make_checker, BodyModel, CheckerKind};
+        let (s, chain, scene, tasks) = task_inside_an_obstacle();
+        let checker = make_checker(CheckerKind::Certified, scene, BodyModel::Capsules);
+        let mut config = s.planner.clone();
+        config.max_iterations = 300;
+        config.budget_growth = 1;
+        let run = |cap: u64| {
+            let mut scratch = Scratch::new(&chain);
+            let rrt = Rrt::new(&chain, checker.as_ref(), &config, &tasks).with_fk_cap(cap);
+            let mut rng = rand::SeedableRng::seed_from_u64(4);
+            let growth = rrt.grow(&mut rng, &mut scratch);
+            (growth, scratch.stats.fk)
+        };
+        let (whole, fk) = run(crate::limits::MAX_CHECK_FK);
+        assert!(!whole.fk_limited);
+        assert_eq!(whole.iterations, 300);
+        assert!(fk > 200, "{fk}");
+        let (capped, fk) = run(100);
+        assert!(capped.fk_limited);
+        assert!(capped.iterations < 300, "{}", capped.iterations);
+        assert!((100..200).contains(&fk), "{fk}");
     }
 
     /// Every node lies within the axis ranges, to the last bit, also where the ranges' limits
