@@ -137,6 +137,10 @@ fn limits_table_matches_the_constants() {
         format!("| file size | {} | COLLADA", mib(MAX_COLLADA_FILE_BYTES)),
         format!("| RRT tree nodes | {} |", grouped(MAX_TREE_NODES)),
         format!(
+            "| self-collision sampling work | {} |",
+            grouped(MAX_SELF_COLLISION_WORK as usize)
+        ),
+        format!(
             "| body tests per planner run | {} |",
             grouped(MAX_BODY_TESTS as usize)
         ),

@@ -203,6 +203,16 @@ impl UrdfRobot {
         if let (Some(p), Some(note)) = (&self.urdf, &r.note) {
             eprintln!("note: {}: {note}", p.display());
         }
+        let acm = r.body.acm();
+        if let (Some(p), true) = (&self.urdf, acm.work_limited()) {
+            eprintln!(
+                "note: {}: self-collision pairs \"Always\" in contact were decided from {} \
+                 random configurations: the sampling stopped at its work limit of {}",
+                p.display(),
+                acm.samples_taken(),
+                kinsynth::limits::MAX_SELF_COLLISION_WORK
+            );
+        }
     }
 }
 

@@ -11,7 +11,9 @@
 //!
 //! One `<disable_collisions>` per excluded pair of body-carrying URDF links, with the reason
 //! (`Adjacent`, `Default`, `Always` or `User`; see [`crate::collision::body::acm`]). Pairs that
-//! never collided in random samples stay enabled, unlike in MoveIt's setup assistant.
+//! never collided in random samples stay enabled, unlike in MoveIt's setup assistant. When the
+//! sampling stopped at its work limit ([`crate::limits::MAX_SELF_COLLISION_WORK`]), a comment
+//! before the pairs says from how many samples "Always" was decided.
 
 use crate::collision::body::{RobotBody, SelfCollisionConfig};
 use crate::design::Design;
@@ -47,7 +49,17 @@ pub fn chain_body_to_srdf(body: &RobotBody, name: &str, base: &str, tip: &str) -
         escape(base),
         escape(tip)
     );
-    for d in body.acm().disabled() {
+    let acm = body.acm();
+    if acm.work_limited() {
+        let _ = writeln!(
+            out,
+            "  <!-- \"Always\" decided from {} random configurations: the sampling stopped at \
+             its work limit of {} before the configured count -->",
+            acm.samples_taken(),
+            crate::limits::MAX_SELF_COLLISION_WORK
+        );
+    }
+    for d in acm.disabled() {
         let _ = writeln!(
             out,
             "  <disable_collisions link1=\"{}\" link2=\"{}\" reason=\"{}\"/>",

@@ -11,7 +11,8 @@
 //! - **Default** when their bodies are in contact at the home pose;
 //! - **Always** when their bodies are in contact in at least [`ALWAYS_FRACTION`] of
 //!   [`SelfCollisionConfig::samples`] random configurations (drawn with
-//!   [`SelfCollisionConfig::seed`]);
+//!   [`SelfCollisionConfig::seed`]; fewer when the sampling reaches
+//!   [`crate::limits::MAX_SELF_COLLISION_WORK`], and then at least 95 % of those taken);
 //! - **User** when the scenario lists their links in `allowed_collisions`.
 //!
 //! Every other pair of bodies on frames moved by different free axes is checked at nodes and
@@ -114,6 +115,10 @@ pub struct AllowedCollisions {
     disabled: Vec<DisabledPair>,
     pairs: Vec<(u32, u32)>,
     home_fold: Option<(usize, usize)>,
+    /// Random configurations sampled for the "Always" rule, and whether sampling stopped
+    /// before [`SelfCollisionConfig::samples`] at [`crate::limits::MAX_SELF_COLLISION_WORK`].
+    sampled: usize,
+    work_limited: bool,
 }
 
 /// One body-carrying frame: its name, the free axes moving it, its bodies.
@@ -135,6 +140,8 @@ struct Contacts {
     near: Vec<(usize, u32, u32)>,
     /// Per listed group pair: in contact at the configuration measured last.
     hit: Vec<bool>,
+    /// Work done so far, in the units of [`crate::limits::MAX_SELF_COLLISION_WORK`].
+    work: u64,
 }
 
 impl Contacts {
@@ -171,6 +178,7 @@ impl Contacts {
             kept += usize::from((cp - cq).norm_squared() <= gap * gap);
         }
         self.near.truncate(kept);
+        self.work += self.pairs.len() as u64 + 64 * kept as u64;
         self.hit.clear();
         self.hit.resize(count, false);
         for block in self.near.chunks(4) {
@@ -206,6 +214,19 @@ impl AllowedCollisions {
     /// itself), if any.
     pub fn home_fold(&self) -> Option<(usize, usize)> {
         self.home_fold
+    }
+
+    /// How many random configurations the "Always" rule sampled (at most
+    /// [`SelfCollisionConfig::samples`]; none when no pair was in question).
+    pub fn samples_taken(&self) -> usize {
+        self.sampled
+    }
+
+    /// Whether the sampling stopped before its configured count, at
+    /// [`crate::limits::MAX_SELF_COLLISION_WORK`]: "Always" was then decided from
+    /// [`Self::samples_taken`] samples.
+    pub fn work_limited(&self) -> bool {
+        self.work_limited
     }
 
     /// The matrix of `body` on `chain` (see the module documentation).
@@ -307,15 +328,23 @@ impl AllowedCollisions {
         }
         let samples = config.samples;
         let max_misses = ((1.0 - ALWAYS_FRACTION) * samples as f64).floor() as usize;
+        let (mut sampled, mut work_limited) = (0, false);
         if samples > 0 && chain.dof() > 0 && !candidates.is_empty() {
             let mut rng = ChaCha8Rng::seed_from_u64(config.seed);
             let mut q = vec![0.0; chain.dof()];
             // The candidates' body pairs are listed again only when a candidate drops out.
             let mut listed = usize::MAX;
+            // The home pose's measure does not count against the sampling's work.
+            contacts.work = 0;
             for _ in 0..samples {
                 if candidates.is_empty() {
                     break;
                 }
+                if contacts.work >= crate::limits::MAX_SELF_COLLISION_WORK {
+                    work_limited = true;
+                    break;
+                }
+                sampled += 1;
                 if listed != candidates.len() {
                     listed = candidates.len();
                     contacts.list(&groups, candidates.iter().map(|c| (c.0, c.1)));
@@ -334,8 +363,11 @@ impl AllowedCollisions {
                 }
                 candidates.retain(|c| c.3 <= max_misses);
             }
+            // "Always" from the samples taken: all of them, unless the work limit stopped
+            // the sampling early.
+            let taken = if work_limited { sampled } else { samples };
             for c in candidates {
-                if c.2 as f64 >= ALWAYS_FRACTION * samples as f64 {
+                if c.2 as f64 >= ALWAYS_FRACTION * taken as f64 {
                     reason[idx(c.0, c.1)] = Some(Reason::Always);
                 }
             }
@@ -373,6 +405,8 @@ impl AllowedCollisions {
             disabled,
             pairs,
             home_fold,
+            sampled,
+            work_limited,
         }
     }
 
