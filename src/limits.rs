@@ -11,6 +11,9 @@ use std::path::Path;
 
 /// Largest scenario (TOML), design (JSON) or URDF file, in bytes (16 MiB).
 pub const MAX_TEXT_FILE_BYTES: u64 = 16 << 20;
+/// Largest reach report `view --reach` reads (`reach --json`, a run's `reach.json`), in bytes
+/// (64 MiB: its paths carry at most [`MAX_REPORT_PATH_VALUES`] values, about 48 MB).
+pub const MAX_REPORT_FILE_BYTES: u64 = 64 << 20;
 /// Largest checkpoint file (`checkpoint.json`), in bytes (64 MiB).
 pub const MAX_CHECKPOINT_BYTES: u64 = 64 << 20;
 /// Largest mesh file (STL or OBJ), in bytes (256 MiB: a binary STL of 5M triangles is 250 MB).
@@ -152,6 +155,15 @@ pub fn check_population_variables(
 /// configured with that many samples would; the SRDF and the `--urdf` commands say so. The
 /// bundled arms use 100–250 units per sample (1.3 million at 100,000 samples for the UR5).
 pub const MAX_SELF_COLLISION_WORK: u64 = 200_000_000;
+
+/// Most path values (points times joints) a reach report carries over all its reached tasks
+/// (and that `view --reach` reads). Each reached task's path runs from home through the tree,
+/// so paths grow with the tree's depth: 1,000 identical tasks with `l_max = 0.001` and 100,000
+/// iterations made paths of thousands of points each, a 1.3 GB report and 3.1 GB of memory.
+/// Paths are kept in task order while they fit; a reached task whose path would not fit stays
+/// reached and says why it has none (`path_omitted`). A million values make a report of about
+/// 48 MB ([`MAX_REPORT_FILE_BYTES`]); bundled runs carry a few thousand.
+pub const MAX_REPORT_PATH_VALUES: usize = 1_000_000;
 
 /// Most random configurations sampled for the allowed-collision matrix
 /// (`robot.self_collision_samples`; MoveIt's setup assistant offers up to 100,000).

@@ -486,3 +486,52 @@ fn same_seed_same_json_whatever_the_thread_count() {
         }
     }
 }
+
+/// A report's paths are bounded in total: 1,000 copies of a paper-2d task with `l_max =
+/// 0.001` reach it through paths of thousands of points each (36 million values in all, a
+/// report of gigabytes). Paths are kept in task order while they fit within
+/// `MAX_REPORT_PATH_VALUES`; every later reached task stays reached and says why it has none.
+#[test]
+fn a_reports_paths_are_bounded_in_total() {
+    let mut s = bundled("paper-2d.toml");
+    let task = s.workspace.tasks[0];
+    s.workspace.tasks = vec![task; 1000];
+    s.workspace.orientations = vec![Default::default(); 1000];
+    let config = PlannerConfig {
+        l_max: 0.001,
+        max_iterations: 100_000,
+        ..s.planner.clone()
+    };
+    let chain = s.space.largest().chain();
+    let scene = Arc::new(CollisionScene::new(&s.workspace));
+    let r = reachability(&chain, &scene, &s.workspace.tasks, &config, 1, 0);
+    assert_eq!(r.reached(), 1000);
+    let joints = chain.dof();
+    let values: Vec<usize> = r
+        .targets
+        .iter()
+        .filter_map(|t| t.path.as_ref())
+        .map(|p| p.points.len() * joints)
+        .collect();
+    let total: usize = values.iter().sum();
+    assert!(total <= kinsynth::limits::MAX_REPORT_PATH_VALUES, "{total}");
+    // The kept paths are the first ones, each longer than 100 points, and the next would not
+    // have fitted.
+    let kept = values.len();
+    assert!(kept > 0 && kept < 1000, "{kept}");
+    assert!(values.iter().all(|&v| v > 100 * joints));
+    assert!(r.targets[..kept].iter().all(|t| t.path.is_some()));
+    assert!(total + values[0] > kinsynth::limits::MAX_REPORT_PATH_VALUES);
+    for t in &r.targets[kept..] {
+        assert!(t.reached && t.path.is_none());
+        let why = t.path_omitted.as_deref().unwrap();
+        assert!(why.contains("1000000 values"), "{why}");
+    }
+    assert!(r.targets[..kept].iter().all(|t| t.path_omitted.is_none()));
+    // The report reads back into `view` (whose read limit holds it).
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("reach.json");
+    std::fs::write(&json, serde_json::to_string_pretty(&r).unwrap()).unwrap();
+    let back = kinsynth::export::view::load_reach(&json, &s.workspace.tasks, joints).unwrap();
+    assert_eq!(back.targets, r.targets);
+}

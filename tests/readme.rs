@@ -137,6 +137,11 @@ fn limits_table_matches_the_constants() {
         format!("| file size | {} | COLLADA", mib(MAX_COLLADA_FILE_BYTES)),
         format!("| RRT tree nodes | {} |", grouped(MAX_TREE_NODES)),
         format!(
+            "| path values per reach report | {} |",
+            grouped(MAX_REPORT_PATH_VALUES)
+        ),
+        format!("| file size | {} | reach reports", mib(MAX_REPORT_FILE_BYTES)),
+        format!(
             "| self-collision sampling work | {} |",
             grouped(MAX_SELF_COLLISION_WORK as usize)
         ),

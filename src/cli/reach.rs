@@ -181,7 +181,7 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
             } else {
                 kinsynth::planning::reachability_tasks
             };
-            plan(
+            let mut report = plan(
                 &chain,
                 body.clone(),
                 &scene,
@@ -190,7 +190,14 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
                 &planner,
                 seed,
                 stream,
-            )
+            );
+            if k > 0 {
+                // Only the first seed's paths are shown and written.
+                for t in &mut report.targets {
+                    t.path = None;
+                }
+            }
+            report
         })
         .collect();
     let elapsed = start.elapsed();
@@ -252,10 +259,19 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
             t.index,
             if t.reached { "reached" } else { "not reached" },
             t.error,
-            t.path
-                .as_ref()
-                .map_or("-".to_string(), |p| format!("{} nodes", p.points.len()))
+            t.path.as_ref().map_or_else(
+                || if t.path_omitted.is_some() {
+                    "omitted"
+                } else {
+                    "-"
+                }
+                .to_string(),
+                |p| format!("{} nodes", p.points.len())
+            )
         );
+        if let Some(why) = &t.path_omitted {
+            say!("      path omitted: {why}");
+        }
         if let Some(why) = &t.reason {
             if report.home_blocked.is_none() {
                 say!("      {why}");

@@ -56,8 +56,12 @@ pub struct TargetReport {
     /// Why the task is unreached (absent when reached).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reason: Option<String>,
-    /// The path from home, when reached.
+    /// The path from home, when reached (and kept: see `path_omitted`).
     pub path: Option<PathReport>,
+    /// Why a reached task carries no path: the report's paths together would have exceeded
+    /// [`crate::limits::MAX_REPORT_PATH_VALUES`] values (points times joints).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub path_omitted: Option<String>,
 }
 
 /// Reachability of one design, with per-task outcomes and the planner's work counters.
@@ -336,6 +340,25 @@ fn plan(
     chain.fk(chain.home(), &mut home_frames);
     let origin = Point3::from(chain.base().translation.vector);
     let bound = chain.reach_bound();
+    // Paths are kept in task order while their points together stay within the limit; a
+    // reached task whose path would exceed it keeps its outcome and says why it has none.
+    let lengths = tree.path_lengths();
+    let joints = names.len().max(1);
+    let mut budget = crate::limits::MAX_REPORT_PATH_VALUES;
+    let kept: Vec<bool> = growth
+        .reached
+        .iter()
+        .map(|n| {
+            n.is_some_and(|n| {
+                let len = lengths[n as usize] as usize * joints;
+                let fits = len <= budget;
+                if fits {
+                    budget -= len;
+                }
+                fits
+            })
+        })
+        .collect();
     let targets: Vec<TargetReport> = tasks
         .iter()
         .enumerate()
@@ -421,9 +444,18 @@ fn plan(
                     [0, 1, 2].map(|i| [rot[(i, 0)], rot[(i, 1)], rot[(i, 2)]])
                 }),
                 reason,
-                path: growth.reached[index].map(|n| PathReport {
-                    joint_names: names.clone(),
-                    points: tree.path_to(n),
+                path: growth.reached[index]
+                    .filter(|_| kept[index])
+                    .map(|n| PathReport {
+                        joint_names: names.clone(),
+                        points: tree.path_to(n),
+                    }),
+                path_omitted: (reached && !kept[index]).then(|| {
+                    format!(
+                        "its path of {} points would take the report's paths beyond the limit of {} values (points times {joints} joints)",
+                        growth.reached[index].map_or(0, |n| lengths[n as usize]),
+                        crate::limits::MAX_REPORT_PATH_VALUES
+                    )
                 }),
             }
         })

@@ -141,6 +141,31 @@ impl Tree {
         &self.rot[i as usize]
     }
 
+    /// Per node, the number of configurations of its path from the root ([`Self::path_to`]'s
+    /// length; 1 for the root): in time linear in the tree, whatever its depth.
+    pub fn path_lengths(&self) -> Vec<u32> {
+        let n = self.parent.len();
+        let mut len = vec![0u32; n];
+        if n == 0 {
+            return len;
+        }
+        len[0] = 1;
+        let mut walk = Vec::new();
+        for i in 0..n {
+            let mut k = i;
+            while len[k] == 0 {
+                walk.push(k);
+                k = self.parent[k] as usize;
+            }
+            let mut l = len[k];
+            while let Some(j) = walk.pop() {
+                l += 1;
+                len[j] = l;
+            }
+        }
+        len
+    }
+
     /// The configurations from the root (home) to node `i`, in order.
     pub fn path_to(&self, i: u32) -> Vec<Vec<f64>> {
         let mut out = Vec::new();

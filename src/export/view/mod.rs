@@ -248,8 +248,9 @@ fn path_configurations(points: &[Vec<f64>], cap: usize) -> Vec<Vec<f64>> {
     out
 }
 
-/// Most path points a report may carry over all its paths.
-pub const MAX_PATH_POINTS: usize = 200_000;
+/// Most path values (points times joints) a report may carry over all its paths: as many as a
+/// planner run keeps ([`crate::limits::MAX_REPORT_PATH_VALUES`]).
+pub const MAX_PATH_VALUES: usize = crate::limits::MAX_REPORT_PATH_VALUES;
 
 /// Most tree nodes a report may carry for the page to draw.
 pub const MAX_TREE_NODES: usize = 1_000_000;
@@ -360,7 +361,7 @@ fn check_figures(report: &ReachReport) -> Result<()> {
 pub fn load_reach(path: &Path, tasks: &[nalgebra::Point3<f64>], dof: usize) -> Result<ReachReport> {
     use crate::error::Error;
     let text =
-        crate::limits::read_text(path, crate::limits::MAX_TEXT_FILE_BYTES).map_err(|source| {
+        crate::limits::read_text(path, crate::limits::MAX_REPORT_FILE_BYTES).map_err(|source| {
             Error::Read {
                 path: path.to_path_buf(),
                 source,
@@ -413,12 +414,14 @@ pub fn load_reach(path: &Path, tasks: &[nalgebra::Point3<f64>], dof: usize) -> R
             ));
         }
         let Some(path) = &t.path else { continue };
-        total = total.saturating_add(path.points.len());
-        if total > MAX_PATH_POINTS {
+        total = total.saturating_add(path.points.len().saturating_mul(dof.max(1)));
+        if total > MAX_PATH_VALUES {
             return Err(bad(
                 format!("targets[{i}].path.points"),
-                format!("{total} points so far"),
-                format!("a report may carry at most {MAX_PATH_POINTS} path points"),
+                format!("{total} values so far"),
+                format!(
+                    "a report may carry at most {MAX_PATH_VALUES} path values (points times joints)"
+                ),
             ));
         }
         for (j, q) in path.points.iter().enumerate() {
