@@ -349,7 +349,8 @@ fn a_result_that_cannot_be_written_leaves_the_others_unwritten() {
 /// A run whose checkpoint could not be read back is refused before it starts: a GA's
 /// population (or a swarm) times the design's free variables, over all islands, is limited
 /// (paper-3d has 56: 10,000 designs make 560,000, above the 500,000 a checkpoint holds), with
-/// one line naming the scenario, the field and the value; ASA, which keeps a few designs, runs.
+/// one line naming the scenario, the field and the value, and no folder left behind; ASA, which
+/// keeps a few designs, runs.
 #[test]
 fn a_population_a_checkpoint_cannot_hold_is_refused() {
     let dir = tempfile::tempdir().unwrap();
@@ -379,7 +380,7 @@ fn a_population_a_checkpoint_cannot_hold_is_refused() {
                 "0",
                 "--out",
             ])
-            .arg(dir.path().join("out"))
+            .arg(dir.path().join("out/run"))
             .args(extra)
             .output()
             .unwrap()
@@ -388,6 +389,8 @@ fn a_population_a_checkpoint_cannot_hold_is_refused() {
         let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
         assert_eq!(o.status.code(), Some(1), "{stderr}");
         assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        // Refused before it wrote anything: the folders it created are gone again.
+        assert!(!dir.path().join("out").exists(), "{stderr}");
         for p in parts {
             assert!(stderr.contains(p), "`{p}` missing from {stderr}");
         }

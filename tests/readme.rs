@@ -140,7 +140,10 @@ fn limits_table_matches_the_constants() {
             "| path values per reach report | {} |",
             grouped(MAX_REPORT_PATH_VALUES)
         ),
-        format!("| file size | {} | reach reports", mib(MAX_REPORT_FILE_BYTES)),
+        format!(
+            "| file size | {} | reach reports",
+            mib(MAX_REPORT_FILE_BYTES)
+        ),
         format!(
             "| self-collision sampling work | {} |",
             grouped(MAX_SELF_COLLISION_WORK as usize)

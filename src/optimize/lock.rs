@@ -63,11 +63,16 @@ fn host_name() -> String {
     std::env::var("HOSTNAME").unwrap_or_else(|_| "unknown".into())
 }
 
-/// A held output-directory lock; dropping it removes the lock file and releases the lock.
+/// A held output-directory lock; dropping it removes the lock file and releases the lock, and
+/// removes the directory too when acquiring created it and it is still empty (a run refused
+/// before it wrote anything leaves nothing behind).
 #[derive(Debug)]
 pub struct OutputLock {
     path: PathBuf,
     file: Option<File>,
+    /// The directories acquiring created (the directory and the missing folders above it),
+    /// deepest first.
+    created: Vec<PathBuf>,
 }
 
 /// What acquiring found besides the lock itself.
@@ -88,6 +93,12 @@ impl OutputLock {
     /// (`.kinsynth-*.tmp`) a killed run left in `dir` and `dir/trajectories`. Refused, with an
     /// error naming the running process, when another process holds it.
     pub fn acquire(dir: &Path) -> Result<(OutputLock, Acquired)> {
+        let created: Vec<PathBuf> = dir
+            .ancestors()
+            .filter(|d| !d.as_os_str().is_empty())
+            .take_while(|d| !d.exists())
+            .map(Path::to_path_buf)
+            .collect();
         std::fs::create_dir_all(dir).map_err(|source| Error::Write {
             path: dir.to_path_buf(),
             source,
@@ -138,6 +149,7 @@ impl OutputLock {
         let lock = OutputLock {
             path,
             file: Some(file),
+            created,
         };
         let mut removed = Vec::new();
         for d in [
@@ -171,8 +183,14 @@ impl OutputLock {
 
 impl Drop for OutputLock {
     fn drop(&mut self) {
-        // Remove the file while holding the lock, then release it by closing.
+        // Remove the file while holding the lock, then the directory this lock created if
+        // nothing else is in it, then release the lock by closing.
         let _ = std::fs::remove_file(&self.path);
+        for dir in &self.created {
+            if std::fs::remove_dir(dir).is_err() {
+                break; // not empty: it (and the folders above it) stay
+            }
+        }
         drop(self.file.take());
     }
 }
