@@ -529,6 +529,8 @@ impl<'r, 'a> IslandJob<'r, 'a> {
                 observer.islands(&new_rows);
                 history.push(row);
                 rows.extend(new_rows);
+                super::output::thin_history(&mut history);
+                super::output::thin_island_rows(&mut rows);
             }
         };
         if root {
@@ -573,6 +575,7 @@ impl<'r, 'a> IslandJob<'r, 'a> {
         if !late.is_empty() {
             let total = counters.evaluations.saturating_add(late_count);
             history.push(history_row(objective, &best, total, elapsed())?);
+            super::output::thin_history(&mut history);
         }
         let summary = runner.conclude(
             objective,

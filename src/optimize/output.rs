@@ -39,6 +39,79 @@ pub struct IslandRow {
     pub best_reachability: f64,
 }
 
+/// Most rows a run keeps of `history.csv`, and of `islands.csv`, in its checkpoint and its
+/// outputs: a row is about 130 bytes of `checkpoint.json`, so a run of fast generations
+/// (paper-2d makes about 30 a second) would outgrow the checkpoint's read limit
+/// ([`crate::limits::MAX_CHECKPOINT_BYTES`]) after about 4.7 hours. Beyond it the rows are
+/// thinned ([`thin_history`], [`thin_island_rows`]).
+pub const MAX_HISTORY_ROWS: usize = 100_000;
+
+/// Keeps `history` within [`MAX_HISTORY_ROWS`] once a row has been added: when it is over,
+/// every other row that repeats its predecessor's best (cost, `R`, links and joints; only the
+/// time and evaluations move on) is dropped, so that every change of the best keeps its first
+/// row (the time to `R = 1` stays exact); should that not halve the rows, every other row of
+/// the older half goes too. The first and last rows always stay. The same rows in give the same
+/// rows out, so a resumed run keeps what an uninterrupted one keeps.
+pub fn thin_history(history: &mut Vec<HistoryRow>) {
+    if history.len() <= MAX_HISTORY_ROWS {
+        return;
+    }
+    let same = |a: &HistoryRow, b: &HistoryRow| {
+        a.best_cost.to_bits() == b.best_cost.to_bits()
+            && a.best_reachability.to_bits() == b.best_reachability.to_bits()
+            && a.best_links == b.best_links
+            && a.best_joints == b.best_joints
+    };
+    let last = history.len() - 1;
+    let mut repeat = 0usize;
+    let mut keep = vec![true; history.len()];
+    for i in 1..last {
+        if same(&history[i], &history[i - 1]) {
+            keep[i] = repeat % 2 == 1;
+            repeat += 1;
+        }
+    }
+    let mut i = 0;
+    history.retain(|_| {
+        i += 1;
+        keep[i - 1]
+    });
+    if history.len() > MAX_HISTORY_ROWS / 2 + MAX_HISTORY_ROWS / 4 {
+        let half = history.len() / 2;
+        let mut i = 0;
+        history.retain(|_| {
+            let k = i;
+            i += 1;
+            k >= half || k % 2 == 0
+        });
+    }
+}
+
+/// Keeps the rows of `islands.csv` within [`MAX_HISTORY_ROWS`] once a generation's rows have
+/// been added: when they are over, every other generation kept in the older half of the rows
+/// goes, whole (the first generation kept stays, as does the newer half). The same rows in
+/// give the same rows out.
+pub fn thin_island_rows(rows: &mut Vec<IslandRow>) {
+    if rows.len() <= MAX_HISTORY_ROWS {
+        return;
+    }
+    let half = rows.len() / 2;
+    let mut group = 0usize;
+    let mut keep = vec![true; rows.len()];
+    for i in 1..half {
+        if rows[i].generation != rows[i - 1].generation {
+            group += 1;
+        }
+        // Within the older half, and the generation does not run on past it.
+        keep[i] = group % 2 == 0 || rows[i].generation == rows[half].generation;
+    }
+    let mut i = 0;
+    rows.retain(|_| {
+        i += 1;
+        keep[i - 1]
+    });
+}
+
 /// Where an island job's results came from, as `best.json` records it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct IslandsInfo {
@@ -238,5 +311,96 @@ impl RunSummary {
         check_kept("links_kept", self.links_kept, links, &what)?;
         check_kept("joints_kept", self.joints_kept, 6 * links, &what)?;
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(i: u64, cost: f64, r: f64) -> HistoryRow {
+        HistoryRow {
+            elapsed_s: i as f64 * 0.03,
+            evaluations: 32 * i,
+            best_cost: cost,
+            best_reachability: r,
+            best_links: 3,
+            best_joints: 4,
+        }
+    }
+
+    /// 300,000 generations whose best changes every 7,919th (and reaches R = 1 at 123,457):
+    /// the history stays within the limit, keeps its first and last rows and the first row of
+    /// every change of the best, in order.
+    #[test]
+    fn the_history_is_thinned_keeping_every_change() {
+        let mut history = Vec::new();
+        let mut changes = Vec::new();
+        let (mut cost, mut r) = (100.0, 0.5);
+        for i in 0..300_000u64 {
+            if i % 7_919 == 0 || i == 123_457 {
+                cost -= 0.001;
+                changes.push(i);
+            }
+            if i == 123_457 {
+                r = 1.0;
+            }
+            history.push(row(i, cost, r));
+            thin_history(&mut history);
+            assert!(history.len() <= MAX_HISTORY_ROWS, "{i}: {}", history.len());
+        }
+        assert!(history.len() > MAX_HISTORY_ROWS / 2, "{}", history.len());
+        assert_eq!(history[0].evaluations, 0);
+        assert_eq!(history.last().unwrap().evaluations, 32 * 299_999);
+        let kept: Vec<u64> = history.iter().map(|h| h.evaluations / 32).collect();
+        assert!(kept.windows(2).all(|w| w[0] < w[1]));
+        for c in changes {
+            assert!(kept.binary_search(&c).is_ok(), "change at {c} dropped");
+        }
+        let first_full = history.iter().find(|h| h.best_reachability == 1.0).unwrap();
+        assert_eq!(first_full.evaluations, 32 * 123_457);
+        // Every row a change: halved by position in the older half, first and last kept.
+        let mut history: Vec<HistoryRow> = (0..=MAX_HISTORY_ROWS as u64)
+            .map(|i| row(i, 1e6 - i as f64, 0.5))
+            .collect();
+        thin_history(&mut history);
+        assert!(
+            history.len() <= MAX_HISTORY_ROWS * 3 / 4 + 1,
+            "{}",
+            history.len()
+        );
+        assert_eq!(history[0].evaluations, 0);
+        assert_eq!(
+            history.last().unwrap().evaluations,
+            32 * MAX_HISTORY_ROWS as u64
+        );
+    }
+
+    /// Three islands over 100,000 generations: `islands.csv` stays near the limit, and every
+    /// generation it keeps has all its islands' rows.
+    #[test]
+    fn island_rows_are_thinned_by_whole_generations() {
+        let mut rows = Vec::new();
+        for g in 1..=100_000u64 {
+            for island in 0..3 {
+                rows.push(IslandRow {
+                    generation: g,
+                    island,
+                    evaluations: g * 10,
+                    best_cost: 1.0,
+                    best_reachability: 1.0,
+                });
+            }
+            thin_island_rows(&mut rows);
+            assert!(rows.len() <= MAX_HISTORY_ROWS + 3, "{g}: {}", rows.len());
+        }
+        assert!(rows.len() > MAX_HISTORY_ROWS / 2);
+        assert_eq!(rows[0].generation, 1);
+        assert_eq!(rows.last().unwrap().generation, 100_000);
+        for chunk in rows.chunks(3) {
+            assert!(chunk.iter().all(|r| r.generation == chunk[0].generation));
+            let islands: Vec<usize> = chunk.iter().map(|r| r.island).collect();
+            assert_eq!(islands, [0, 1, 2]);
+        }
     }
 }

@@ -797,6 +797,7 @@ impl<'a> Runner<'a> {
             let row = history_row(objective, &best, evaluations, elapsed())?;
             observer.generation(&row);
             history.push(row);
+            super::output::thin_history(&mut history);
             if last_checkpoint.elapsed().as_secs_f64() >= o.checkpoint_interval {
                 self.write_checkpoint(
                     optimizer.save(),
@@ -833,6 +834,7 @@ impl<'a> Runner<'a> {
         if !late.is_empty() {
             let total = evaluations.saturating_add(late.len() as u64);
             history.push(history_row(objective, &best, total, elapsed())?);
+            super::output::thin_history(&mut history);
         }
         self.conclude(
             objective,
