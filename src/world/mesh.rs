@@ -877,9 +877,11 @@ pub fn count_triangles(path: &Path) -> Option<usize> {
             let (declared, ascii) = stl_layout(&bytes);
             if ascii {
                 // Lines may end with carriage returns alone (see `parse_stl`).
-                let facets = bytes
-                    .split(|&b| b == b'\n' || b == b'\r')
-                    .filter(|line| words(line).next() == Some(b"facet"));
+                let facets = bytes.split(|&b| b == b'\n' || b == b'\r').filter(|line| {
+                    words(line)
+                        .next()
+                        .is_some_and(|w| w.eq_ignore_ascii_case(b"facet"))
+                });
                 Some(facets.count())
             } else {
                 declared.map(|n| n as usize)
@@ -978,12 +980,21 @@ fn parse_stl(path: &Path, bytes: &[u8]) -> Result<MeshData, MeshError> {
             None => &[][..],
         };
         // A file of several solids (`endsolid`, then `solid` again) is read whole: the lines
-        // between them are dropped, and the last `endsolid` ends the one solid read.
+        // between them are dropped, and one `endsolid` ends the one solid read (also when
+        // the file has none: Assimp-based readers accept that). Keywords are read in any
+        // case (`FACET NORMAL`, as some exporters write them).
         let mut normalised = b"solid mesh\n".to_vec();
-        let (mut ended, mut any_end) = (false, false);
+        let mut ended = false;
         for line in rest.split_inclusive(|&b| b == b'\n') {
+            let lower: Vec<u8>;
+            let line = if line.iter().any(u8::is_ascii_uppercase) {
+                lower = line.to_ascii_lowercase();
+                &lower[..]
+            } else {
+                line
+            };
             match words(line).next() {
-                Some(b"endsolid") => (ended, any_end) = (true, true),
+                Some(b"endsolid") => ended = true,
                 Some(b"solid") if ended => ended = false,
                 None => {} // a blank line
                 // Normals are not used (and may be NaN): the reader gets zeros.
@@ -1000,11 +1011,9 @@ fn parse_stl(path: &Path, bytes: &[u8]) -> Result<MeshData, MeshError> {
                         normalised.push(b'\n');
                     }
                 }
-            }
+            };
         }
-        if any_end {
-            normalised.extend_from_slice(b"endsolid mesh\n");
-        }
+        normalised.extend_from_slice(b"endsolid mesh\n");
         ("ASCII STL", Cow::Owned(normalised))
     } else {
         let format = "binary STL";
@@ -1159,7 +1168,10 @@ fn ascii_stl_error_line(bytes: &[u8]) -> Option<(usize, String, String)> {
     for (number, raw) in bytes[start..].split(|&b| b == b'\n').enumerate() {
         let number = number + before;
         let line = String::from_utf8_lossy(raw);
-        let words: Vec<&str> = line.split_whitespace().collect();
+        // Keywords in any case, as `parse_stl` reads them.
+        let lower = line.to_ascii_lowercase();
+        let words: Vec<&str> = lower.split_whitespace().collect();
+        let original: Vec<&str> = line.split_whitespace().collect();
         if words.is_empty() {
             continue;
         }
@@ -1197,7 +1209,7 @@ fn ascii_stl_error_line(bytes: &[u8]) -> Option<(usize, String, String)> {
                 if words.len() != 4 || words[0] != "vertex" {
                     Some("expected `vertex x y z`".to_string())
                 } else {
-                    numbers(&words[1..])
+                    numbers(&original[1..])
                 }
             }
             Next::EndLoop => {
@@ -1213,11 +1225,12 @@ fn ascii_stl_error_line(bytes: &[u8]) -> Option<(usize, String, String)> {
             return Some((number + 1, what, last.1));
         }
     }
-    if next == Next::AfterEnd {
+    // A file may end after a whole facet without `endsolid`.
+    if matches!(next, Next::AfterEnd | Next::Facet) {
         return None;
     }
     let (line, text) = last;
-    Some((line, "the file ends before `endsolid`".to_string(), text))
+    Some((line, "the file ends inside a facet".to_string(), text))
 }
 
 /// Parses OBJ bytes with tobj, merging all models into one mesh.
@@ -2229,7 +2242,14 @@ f -3 -2 -1
                 "facet normal 0 0 1\nouter  lop\n",
                 "line 10: expected `outer loop`: `outer  lop`",
             ),
-            ("", "line 8: the file ends before `endsolid`: `endfacet`"),
+            (
+                "facet normal 0 0 1\nouter loop\n",
+                "line 10: the file ends inside a facet: `outer loop`",
+            ),
+            (
+                "FACET NORMAL 0 0 1\nOUTER LOOP\nVERTEX 0 0 INF\n",
+                "line 11: `INF` is not a finite 32-bit number: `VERTEX 0 0 INF`",
+            ),
         ];
         for (bad, expected) in cases {
             let text = format!("solid x\n{facet}{bad}");
@@ -2241,6 +2261,14 @@ f -3 -2 -1
         }
         let good = format!("solid x\n{facet}endsolid x\n");
         assert!(load_mesh(&write(&dir, "good.stl", good.as_bytes())).is_ok());
+        // As Assimp-based readers (coal, MoveIt) read them: keywords in capitals, and a file
+        // that ends after a whole facet without `endsolid`.
+        let upper = write(&dir, "upper.stl", good.to_ascii_uppercase().as_bytes());
+        assert_eq!(load_mesh(&upper).unwrap().triangles.len(), 1);
+        assert_eq!(count_triangles(&upper), Some(1), "counted ahead as read");
+        let open = format!("solid x\n{facet}{facet}").replacen("vertex 0 0 0", "vertex 0 0 1", 1);
+        let open = write(&dir, "open.stl", open.as_bytes());
+        assert_eq!(load_mesh(&open).unwrap().triangles.len(), 2);
         // Normals are not read (NaN is fine), and carriage returns alone end lines.
         let nan = good.replacen("facet normal 0 0 1", "facet normal nan inf -nan", 1);
         assert!(load_mesh(&write(&dir, "nan.stl", nan.as_bytes())).is_ok());
