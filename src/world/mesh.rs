@@ -1364,16 +1364,46 @@ type ObjRefusal = (usize, String, &'static str);
 /// (`Some`; lines keep their numbers): `l` and `p` lines are emptied (tobj would fill a
 /// polyline of three or more points as a polygon; Assimp drops lines and points, as collision
 /// geometry must), a `#` comment after the data of a `v`, `vt`, `vn` or `f` line is cut
-/// (tobj cannot read it; Assimp skips it), and a vertex colour is dropped (tobj refuses colours
-/// on some vertices only; Assimp reads them; neither is geometry).
+/// (tobj cannot read it; Assimp skips it), a vertex colour is dropped (tobj refuses colours
+/// on some vertices only; Assimp reads them; neither is geometry), and when a face uses a
+/// position a later object defines (Assimp reads indices over the whole file, tobj over what
+/// the face's object has read at its end), the `o` and `g` lines are emptied (the objects are
+/// merged into one mesh anyway).
 fn obj_prepare(bytes: &[u8]) -> Result<Option<Vec<u8>>, ObjRefusal> {
     const GEOMETRY: [&[u8]; 6] = [b"v", b"vt", b"vn", b"f", b"l", b"p"];
     let refuse = |number: usize, raw: &[u8], why: &'static str| {
         Err((number + 1, quote(&String::from_utf8_lossy(raw)), why))
     };
     let mut rewrite = false;
+    // Per object (from an `o` or `g` line on), the counts of positions, texture coordinates and
+    // normals at its end and the largest positive index its faces use of each.
+    let mut ends: Vec<[usize; 3]> = Vec::new();
+    let mut used: Vec<[usize; 3]> = vec![[0; 3]];
+    let mut counts = [0usize; 3];
     for (number, raw) in bytes.split(|&b| b == b'\n').enumerate() {
         let first = words(raw).next().unwrap_or(b"");
+        match first {
+            b"v" => counts[0] += 1,
+            b"vt" => counts[1] += 1,
+            b"vn" => counts[2] += 1,
+            b"o" | b"g" => {
+                ends.push(counts);
+                used.push([0; 3]);
+            }
+            b"f" => {
+                let data = raw.split(|&b| b == b'#').next().unwrap_or(raw);
+                let last = used.last_mut().expect("one object at least");
+                for vertex in words(data).skip(1) {
+                    for (k, index) in vertex.split(|&b| b == b'/').take(3).enumerate() {
+                        let index = std::str::from_utf8(index).ok().and_then(|i| i.parse().ok());
+                        if let Some(i) = index.filter(|&i: &usize| i > 0) {
+                            last[k] = last[k].max(i);
+                        }
+                    }
+                }
+            }
+            _ => {}
+        }
         let geometry = GEOMETRY.contains(&first);
         let data = raw.split(|&b| b == b'#').next().unwrap_or(raw);
         // As tobj splits a line: at any Unicode space (a vertical tab, a no-break space).
@@ -1413,6 +1443,15 @@ fn obj_prepare(bytes: &[u8]) -> Result<Option<Vec<u8>>, ObjRefusal> {
             || (geometry && raw.contains(&b'#'))
             || (first == b"v" && obj_coloured(raw));
     }
+    ends.push(counts);
+    // A face that uses a position (texture coordinate, normal) a later object defines: Assimp
+    // reads indices over the whole file, tobj only over what its object's end has read. As the
+    // objects are merged anyway, their `o` and `g` lines are then emptied.
+    let forward = used
+        .iter()
+        .zip(&ends)
+        .any(|(u, e)| (0..3).any(|k| u[k] > e[k] && u[k] <= counts[k]));
+    rewrite |= forward;
     if !rewrite {
         return Ok(None);
     }
@@ -1422,7 +1461,7 @@ fn obj_prepare(bytes: &[u8]) -> Result<Option<Vec<u8>>, ObjRefusal> {
             out.push(b'\n');
         }
         let first = words(raw).next().unwrap_or(b"");
-        if matches!(first, b"l" | b"p") {
+        if matches!(first, b"l" | b"p") || (forward && matches!(first, b"o" | b"g")) {
             continue;
         }
         let keep = match raw.iter().position(|&b| b == b'#') {
@@ -2159,7 +2198,8 @@ f -3 -2 -1
         }
         // Where tobj's own rules differ from a plain reading: `l` indices are never resolved, a
         // texture index of 0 is none, an empty fourth part of a corner is allowed, and positive
-        // indices count the positions read when their object ends.
+        // indices count the positions read when their object ends (the whole file's, when a
+        // face uses a later object's, as Assimp reads them).
         let v4 = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n";
         for (text, expected) in [
             (
@@ -2175,8 +2215,9 @@ f -3 -2 -1
                 "line 6: face parse error",
             ),
             (
+                // `f 1 2 5` uses the next object's position, which Assimp reads too.
                 format!("o a\n{v4}f 1 2 5\no b\nv 1 1 1\nf 1 2 9\n"),
-                "line 6: face vertex index out of bounds: `f 1 2 5`",
+                "line 9: face vertex index out of bounds: `f 1 2 9`",
             ),
         ] {
             let message = load_err(&write(&dir, "rules.obj", text.as_bytes()));
@@ -2214,6 +2255,35 @@ f -3 -2 -1
         assert!(message.contains("line 6: face"), "{message}");
         assert!(message.ends_with("…`"), "{message}");
         assert!(message.len() < 250, "{message}");
+    }
+
+    /// A face may use positions a later object defines, as Assimp-based readers (coal, MoveIt)
+    /// read it: the objects are merged (coal 3.0.3 reads both files below as 2 triangles of 4
+    /// vertices, and refuses an index beyond the file's positions, as here).
+    #[test]
+    fn obj_faces_may_use_positions_of_later_objects() {
+        let dir = tempfile::tempdir().unwrap();
+        let ahead = "o a\nf 1 2 3\nf 1 3 4\no b\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 1\n";
+        let mesh = load_mesh(&write(&dir, "ahead.obj", ahead.as_bytes())).unwrap();
+        assert_eq!(mesh.triangles.len(), 2);
+        let corner = |t: usize, k: usize| mesh.vertices[mesh.triangles[t][k] as usize];
+        assert_eq!(corner(1, 2), [1.0, 1.0, 1.0]);
+        // Relative indices count what is read so far; a later group's position by number.
+        let mixed = "o a\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\nf 1 2 5\ng b\nv 1 1 1\nv 2 2 2\n";
+        let mesh = load_mesh(&write(&dir, "mixed.obj", mixed.as_bytes())).unwrap();
+        assert_eq!(mesh.triangles.len(), 2);
+        let corner = |t: usize, k: usize| mesh.vertices[mesh.triangles[t][k] as usize];
+        assert_eq!(
+            [corner(0, 0), corner(0, 1), corner(0, 2)],
+            [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
+        );
+        assert_eq!(corner(1, 2), [2.0, 2.0, 2.0]);
+        let beyond = "o a\nf 1 2 9\no b\nv 0 0 0\nv 1 0 0\nv 0 1 0\n";
+        let message = load_err(&write(&dir, "beyond.obj", beyond.as_bytes()));
+        assert!(
+            message.contains("line 2: face vertex index out of bounds: `f 1 2 9`"),
+            "{message}"
+        );
     }
 
     /// An ASCII STL the reader refuses is named with the line that breaks its grammar, quoted.
