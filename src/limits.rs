@@ -151,9 +151,10 @@ pub fn check_population_variables(
 /// distance of two boxes costs about as much as 64 ball tests). Two links of 499 interleaved
 /// plates in contact almost everywhere take about 10 million units per sample: 1,000 samples
 /// took 68 s, and 100,000 would have taken two hours. A sampling that reaches the limit stops,
-/// and decides "Always" from the samples taken (in contact in at least 95 % of them), as a run
-/// configured with that many samples would; the SRDF and the `--urdf` commands say so. The
-/// bundled arms use 100–250 units per sample (1.3 million at 100,000 samples for the UR5).
+/// and the pairs it has not decided stay checked (a few samples cannot tell a pair always in
+/// contact from one in contact 90 % of the time); the SRDF and the `--urdf` commands say so,
+/// and an SRDF or `allowed_collisions` can disable such pairs. The bundled arms use 100–250
+/// units per sample (1.3 million at 100,000 samples for the UR5).
 pub const MAX_SELF_COLLISION_WORK: u64 = 200_000_000;
 
 /// Most path values (points times joints) a reach report carries over all its reached tasks

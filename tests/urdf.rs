@@ -968,8 +968,9 @@ fn interleaved_plates(plates: usize) -> String {
 /// The "Always" rule's sampling is bounded by its work, not by its sample count alone: two
 /// links of 499 interleaved plates (249,001 body pairs measured per sample) took 68 s at the
 /// default 1,000 samples and would have taken two hours at 100,000. The sampling stops at
-/// `MAX_SELF_COLLISION_WORK` and decides as a run configured with the samples it took; a few
-/// plates take every sample and are found "Always" in contact.
+/// `MAX_SELF_COLLISION_WORK`, and the pairs it has not decided stay checked (19 samples cannot
+/// tell "always" from "often"); a few plates take every sample and are found "Always" in
+/// contact.
 #[test]
 fn self_collision_sampling_is_bounded_by_its_work() {
     use kinsynth::collision::body::acm::Reason;
@@ -987,6 +988,12 @@ fn self_collision_sampling_is_bounded_by_its_work() {
         std::fs::write(&path, interleaved_plates(plates)).unwrap();
         kinsynth::import::load_robot(&path, None, None, None, 4, &options(samples)).unwrap()
     };
+    let plates_pair = |acm: &kinsynth::collision::body::AllowedCollisions| {
+        acm.disabled()
+            .iter()
+            .find(|d| (d.link1.as_str(), d.link2.as_str()) == ("a", "b"))
+            .map(|d| d.reason)
+    };
     let r = import(499, most);
     let acm = r.body.acm();
     let taken = acm.samples_taken();
@@ -995,20 +1002,15 @@ fn self_collision_sampling_is_bounded_by_its_work() {
         "499 plates: {taken} samples, not limited"
     );
     assert!((1..1_000).contains(&taken), "499 plates: {taken} samples");
-    let again = import(499, taken);
-    assert!(!again.body.acm().work_limited());
-    assert_eq!(again.body.acm().disabled(), acm.disabled());
-    assert_eq!(again.body.acm().pairs(), acm.pairs());
+    // Undecided: the plates' pairs stay checked (all 249,001 of them).
+    assert_eq!(plates_pair(acm), None);
+    assert!(acm.pairs().len() >= 499 * 499, "{}", acm.pairs().len());
     // Three plates: every sample taken (they touch in about 98 % of them).
     let r = import(3, most);
     let acm = r.body.acm();
     assert!(!acm.work_limited());
     assert_eq!(acm.samples_taken(), most);
-    let pair = acm
-        .disabled()
-        .iter()
-        .find(|d| (d.link1.as_str(), d.link2.as_str()) == ("a", "b"));
-    assert_eq!(pair.map(|d| d.reason), Some(Reason::Always));
+    assert_eq!(plates_pair(acm), Some(Reason::Always));
     // The bundled arms stay far below the limit at the largest sample count.
     for arm in ["ur5.urdf", "mesh_arm.urdf"] {
         let path = root().join("examples/robots").join(arm);

@@ -206,8 +206,9 @@ impl UrdfRobot {
         let acm = r.body.acm();
         if let (Some(p), true) = (&self.urdf, acm.work_limited()) {
             eprintln!(
-                "note: {}: self-collision pairs \"Always\" in contact were decided from {} \
-                 random configurations: the sampling stopped at its work limit of {}",
+                "note: {}: the self-collision sampling stopped after {} random configurations, \
+                 at its work limit of {}: the pairs it had not decided stay checked (an SRDF or \
+                 allowed_collisions can leave them out)",
                 p.display(),
                 acm.samples_taken(),
                 kinsynth::limits::MAX_SELF_COLLISION_WORK

@@ -13,7 +13,7 @@
 //! (`Adjacent`, `Default`, `Always` or `User`; see [`crate::collision::body::acm`]). Pairs that
 //! never collided in random samples stay enabled, unlike in MoveIt's setup assistant. When the
 //! sampling stopped at its work limit ([`crate::limits::MAX_SELF_COLLISION_WORK`]), a comment
-//! before the pairs says from how many samples "Always" was decided.
+//! before the pairs says so: the pairs it had not decided stay enabled.
 
 use crate::collision::body::{RobotBody, SelfCollisionConfig};
 use crate::design::Design;
@@ -53,8 +53,8 @@ pub fn chain_body_to_srdf(body: &RobotBody, name: &str, base: &str, tip: &str) -
     if acm.work_limited() {
         let _ = writeln!(
             out,
-            "  <!-- \"Always\" decided from {} random configurations: the sampling stopped at \
-             its work limit of {} before the configured count -->",
+            "  <!-- the \"Always\" sampling stopped after {} random configurations, at its \
+             work limit of {}: the pairs it had not decided stay enabled -->",
             acm.samples_taken(),
             crate::limits::MAX_SELF_COLLISION_WORK
         );
