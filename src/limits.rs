@@ -12,7 +12,7 @@ use std::path::Path;
 /// Largest scenario (TOML), design (JSON) or URDF file, in bytes (16 MiB).
 pub const MAX_TEXT_FILE_BYTES: u64 = 16 << 20;
 /// Largest reach report `view --reach` reads (`reach --json`, a run's `reach.json`), in bytes
-/// (64 MiB: its paths carry at most [`MAX_REPORT_PATH_VALUES`] values, about 48 MB).
+/// (64 MiB: its paths carry at most [`MAX_REPORT_PATH_VALUES`] values, at most about 28 MB).
 pub const MAX_REPORT_FILE_BYTES: u64 = 64 << 20;
 /// Largest checkpoint file (`checkpoint.json`), in bytes (64 MiB).
 pub const MAX_CHECKPOINT_BYTES: u64 = 64 << 20;
@@ -162,9 +162,12 @@ pub const MAX_SELF_COLLISION_WORK: u64 = 200_000_000;
 /// so paths grow with the tree's depth: 1,000 identical tasks with `l_max = 0.001` and 100,000
 /// iterations made paths of thousands of points each, a 1.3 GB report and 3.1 GB of memory.
 /// Paths are kept in task order while they fit; a reached task whose path would not fit stays
-/// reached and says why it has none (`path_omitted`). A million values make a report of about
-/// 48 MB ([`MAX_REPORT_FILE_BYTES`]); bundled runs carry a few thousand.
-pub const MAX_REPORT_PATH_VALUES: usize = 1_000_000;
+/// reached and says why it has none (`path_omitted`). Each path's joint names count too, one
+/// value per 8 bytes (a path carries them: 10,000 tasks of a joint named with 200,000
+/// characters took 3.9 GB). A value takes up to about 56 bytes of the report (one joint per
+/// point), so the paths stay within 28 MB, and a report with its `--tree` within
+/// [`MAX_REPORT_FILE_BYTES`]; bundled runs carry a few thousand.
+pub const MAX_REPORT_PATH_VALUES: usize = 500_000;
 
 /// Most random configurations sampled for the allowed-collision matrix
 /// (`robot.self_collision_samples`; MoveIt's setup assistant offers up to 100,000).

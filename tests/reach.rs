@@ -490,7 +490,8 @@ fn same_seed_same_json_whatever_the_thread_count() {
 /// A report's paths are bounded in total: 1,000 copies of a paper-2d task with `l_max =
 /// 0.001` reach it through paths of thousands of points each (36 million values in all, a
 /// report of gigabytes). Paths are kept in task order while they fit within
-/// `MAX_REPORT_PATH_VALUES`; every later reached task stays reached and says why it has none.
+/// `MAX_REPORT_PATH_VALUES` (values and joint names); every later reached task stays reached
+/// and says why it has none. Renamed to long URDF joint names, fewer paths fit.
 #[test]
 fn a_reports_paths_are_bounded_in_total() {
     let mut s = bundled("paper-2d.toml");
@@ -511,7 +512,7 @@ fn a_reports_paths_are_bounded_in_total() {
         .targets
         .iter()
         .filter_map(|t| t.path.as_ref())
-        .map(|p| p.points.len() * joints)
+        .map(|p| kinsynth::planning::reach::path_cost(p.points.len(), &p.joint_names))
         .collect();
     let total: usize = values.iter().sum();
     assert!(total <= kinsynth::limits::MAX_REPORT_PATH_VALUES, "{total}");
@@ -525,9 +526,35 @@ fn a_reports_paths_are_bounded_in_total() {
     for t in &r.targets[kept..] {
         assert!(t.reached && t.path.is_none());
         let why = t.path_omitted.as_deref().unwrap();
-        assert!(why.contains("1000000 values"), "{why}");
+        assert!(why.contains("500000 values"), "{why}");
     }
     assert!(r.targets[..kept].iter().all(|t| t.path_omitted.is_none()));
+    // Renamed to joint names of 20,000 characters (a URDF's), fewer paths fit, and the report
+    // still within the limit.
+    let mut renamed = r.clone();
+    let long: Vec<String> = (0..joints)
+        .map(|j| format!("{j}{}", "x".repeat(19_999)))
+        .collect();
+    kinsynth::import::urdf::rename_joints(&mut renamed, &long);
+    let costs: Vec<usize> = renamed
+        .targets
+        .iter()
+        .filter_map(|t| t.path.as_ref())
+        .map(|p| kinsynth::planning::reach::path_cost(p.points.len(), &p.joint_names))
+        .collect();
+    assert!(
+        costs.len() < kept && !costs.is_empty(),
+        "{} of {kept}",
+        costs.len()
+    );
+    assert!(costs.iter().sum::<usize>() <= kinsynth::limits::MAX_REPORT_PATH_VALUES);
+    assert!(renamed
+        .targets
+        .iter()
+        .all(|t| t.path.is_some() != t.path_omitted.is_some()));
+    assert!(renamed.targets[..costs.len()]
+        .iter()
+        .all(|t| t.path.as_ref().unwrap().joint_names == long));
     // The report reads back into `view` (whose read limit holds it).
     let dir = tempfile::tempdir().unwrap();
     let json = dir.path().join("reach.json");

@@ -1041,13 +1041,11 @@ pub fn chain_from_urdf(
 }
 
 /// Replaces the joint names of every path in `report` with `names` (the URDF joint names of an
-/// imported chain, in actuation-vector order), so the paths replay on that URDF.
+/// imported chain, in actuation-vector order), so the paths replay on that URDF; the paths
+/// stay within the report's limit with those names
+/// ([`crate::planning::reach::rename_joints`]).
 pub fn rename_joints(report: &mut crate::planning::ReachReport, names: &[String]) {
-    for t in &mut report.targets {
-        if let Some(p) = &mut t.path {
-            p.joint_names = names.to_vec();
-        }
-    }
+    crate::planning::reach::rename_joints(report, names);
 }
 
 #[cfg(test)]

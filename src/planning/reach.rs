@@ -127,6 +127,53 @@ impl ReachReport {
     }
 }
 
+/// What a path of `points` configurations over the joints `names` counts against
+/// [`crate::limits::MAX_REPORT_PATH_VALUES`]: its values (points times joints, at least one
+/// joint), and its joint names at one value per 8 bytes (each path carries them).
+pub fn path_cost(points: usize, names: &[String]) -> usize {
+    let text: usize = names.iter().map(|n| n.len().saturating_add(4)).sum();
+    points
+        .saturating_mul(names.len().max(1))
+        .saturating_add(text.div_ceil(8))
+}
+
+/// Takes a path of `points` configurations over the joints `names` from what is left of a
+/// report's `budget`, if it fits ([`path_cost`]).
+fn take_path(budget: &mut usize, points: usize, names: &[String]) -> bool {
+    let cost = path_cost(points, names);
+    let fits = cost <= *budget;
+    if fits {
+        *budget -= cost;
+    }
+    fits
+}
+
+/// Why a reached task's path of `points` configurations is left out of its report.
+fn path_omitted(points: usize) -> String {
+    format!(
+        "its path of {points} points would take the report's paths beyond the limit of {} values (points times joints, and the joint names)",
+        crate::limits::MAX_REPORT_PATH_VALUES
+    )
+}
+
+/// Gives every kept path of `report` the joint names `names` (an imported robot's URDF joint
+/// names, in actuation-vector order, so the paths replay on that URDF), keeping the report's
+/// paths within [`crate::limits::MAX_REPORT_PATH_VALUES`] with those names ([`path_cost`]):
+/// in task order, a path that no longer fits is left out and its task says why.
+pub fn rename_joints(report: &mut ReachReport, names: &[String]) {
+    let mut budget = crate::limits::MAX_REPORT_PATH_VALUES;
+    for t in &mut report.targets {
+        let Some(p) = &mut t.path else { continue };
+        if take_path(&mut budget, p.points.len(), names) {
+            p.joint_names.clear();
+            p.joint_names.extend_from_slice(names);
+        } else {
+            t.path_omitted = Some(path_omitted(p.points.len()));
+            t.path = None;
+        }
+    }
+}
+
 /// The random stream of a reachability evaluation: ChaCha8 seeded with `seed`, on stream
 /// `stream` (e.g. an individual's index in an optimiser), so results never depend on which
 /// thread runs them.
@@ -343,21 +390,11 @@ fn plan(
     // Paths are kept in task order while their points together stay within the limit; a
     // reached task whose path would exceed it keeps its outcome and says why it has none.
     let lengths = tree.path_lengths();
-    let joints = names.len().max(1);
     let mut budget = crate::limits::MAX_REPORT_PATH_VALUES;
     let kept: Vec<bool> = growth
         .reached
         .iter()
-        .map(|n| {
-            n.is_some_and(|n| {
-                let len = lengths[n as usize] as usize * joints;
-                let fits = len <= budget;
-                if fits {
-                    budget -= len;
-                }
-                fits
-            })
-        })
+        .map(|n| n.is_some_and(|n| take_path(&mut budget, lengths[n as usize] as usize, &names)))
         .collect();
     let targets: Vec<TargetReport> = tasks
         .iter()
@@ -451,11 +488,7 @@ fn plan(
                         points: tree.path_to(n),
                     }),
                 path_omitted: (reached && !kept[index]).then(|| {
-                    format!(
-                        "its path of {} points would take the report's paths beyond the limit of {} values (points times {joints} joints)",
-                        growth.reached[index].map_or(0, |n| lengths[n as usize]),
-                        crate::limits::MAX_REPORT_PATH_VALUES
-                    )
+                    path_omitted(growth.reached[index].map_or(0, |n| lengths[n as usize] as usize))
                 }),
             }
         })

@@ -414,13 +414,14 @@ pub fn load_reach(path: &Path, tasks: &[nalgebra::Point3<f64>], dof: usize) -> R
             ));
         }
         let Some(path) = &t.path else { continue };
-        total = total.saturating_add(path.points.len().saturating_mul(dof.max(1)));
+        let cost = crate::planning::reach::path_cost(path.points.len(), &path.joint_names);
+        total = total.saturating_add(cost);
         if total > MAX_PATH_VALUES {
             return Err(bad(
                 format!("targets[{i}].path.points"),
                 format!("{total} values so far"),
                 format!(
-                    "a report may carry at most {MAX_PATH_VALUES} path values (points times joints)"
+                    "a report may carry at most {MAX_PATH_VALUES} path values (points times joints, and the joint names at one value per 8 bytes)"
                 ),
             ));
         }
