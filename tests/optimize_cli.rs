@@ -415,6 +415,20 @@ fn a_population_a_checkpoint_cannot_hold_is_refused() {
             "560000",
         ],
     );
+    // Through `..`, a folder that existed stays, and nothing is removed.
+    let keep = dir.path().join("keep");
+    std::fs::create_dir(&keep).unwrap();
+    let o = Command::new(BIN)
+        .arg("optimize")
+        .arg(&big)
+        .args(["--quiet", "--evaluations", "2", "--out"])
+        .arg(dir.path().join("new/../keep"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(keep.is_dir());
+    std::fs::remove_dir(&keep).unwrap();
+    let _ = std::fs::remove_dir(dir.path().join("new"));
     let o = run(&half, &[]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let o = run(&big, &["--optimizer", "asa"]);

@@ -93,12 +93,26 @@ impl OutputLock {
     /// (`.kinsynth-*.tmp`) a killed run left in `dir` and `dir/trajectories`. Refused, with an
     /// error naming the running process, when another process holds it.
     pub fn acquire(dir: &Path) -> Result<(OutputLock, Acquired)> {
-        let created: Vec<PathBuf> = dir
-            .ancestors()
-            .filter(|d| !d.as_os_str().is_empty())
-            .take_while(|d| !d.exists())
-            .map(Path::to_path_buf)
-            .collect();
+        // Only for a plain path: through `..` or a symbolic link an ancestor's name may not
+        // be the folder that is created (`new/../keep` creates `new` and names `keep`).
+        let plain = dir.components().all(|c| {
+            matches!(
+                c,
+                std::path::Component::Normal(_) | std::path::Component::RootDir
+            )
+        }) && dir.ancestors().skip(1).all(|d| {
+            d.as_os_str().is_empty()
+                || std::fs::symlink_metadata(d).map_or(true, |m| !m.file_type().is_symlink())
+        });
+        let created: Vec<PathBuf> = if plain {
+            dir.ancestors()
+                .filter(|d| !d.as_os_str().is_empty())
+                .take_while(|d| !d.exists())
+                .map(Path::to_path_buf)
+                .collect()
+        } else {
+            Vec::new()
+        };
         std::fs::create_dir_all(dir).map_err(|source| Error::Write {
             path: dir.to_path_buf(),
             source,

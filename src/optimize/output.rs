@@ -49,8 +49,9 @@ pub const MAX_HISTORY_ROWS: usize = 100_000;
 /// Keeps `history` within [`MAX_HISTORY_ROWS`] once a row has been added: when it is over,
 /// every other row that repeats its predecessor's best (cost, `R`, links and joints; only the
 /// time and evaluations move on) is dropped, so that every change of the best keeps its first
-/// row (the time to `R = 1` stays exact); should that not halve the rows, every other row of
-/// the older half goes too. The first and last rows always stay. The same rows in give the same
+/// row; should that leave more than three quarters, every other row of the older half goes
+/// too, but for the rows where `R` changes (so the time to `R = 1` stays exact), unless those
+/// alone are too many. The first and last rows always stay. The same rows in give the same
 /// rows out, so a resumed run keeps what an uninterrupted one keeps.
 pub fn thin_history(history: &mut Vec<HistoryRow>) {
     if history.len() <= MAX_HISTORY_ROWS {
@@ -76,13 +77,26 @@ pub fn thin_history(history: &mut Vec<HistoryRow>) {
         i += 1;
         keep[i - 1]
     });
-    if history.len() > MAX_HISTORY_ROWS / 2 + MAX_HISTORY_ROWS / 4 {
+    // Still over three quarters: every other row of the older half goes, but for those where
+    // the best's R changes (the first row of R = 1 among them); and if those alone keep it
+    // over, every other row of the older half.
+    for keep_changes_of_r in [true, false] {
+        if history.len() <= MAX_HISTORY_ROWS / 2 + MAX_HISTORY_ROWS / 4 {
+            return;
+        }
         let half = history.len() / 2;
+        let changes: Vec<bool> = (0..history.len())
+            .map(|k| {
+                k > 0
+                    && history[k].best_reachability.to_bits()
+                        != history[k - 1].best_reachability.to_bits()
+            })
+            .collect();
         let mut i = 0;
         history.retain(|_| {
             let k = i;
             i += 1;
-            k >= half || k % 2 == 0
+            k >= half || k % 2 == 0 || (keep_changes_of_r && changes[k])
         });
     }
 }
@@ -359,6 +373,21 @@ mod tests {
         }
         let first_full = history.iter().find(|h| h.best_reachability == 1.0).unwrap();
         assert_eq!(first_full.evaluations, 32 * 123_457);
+        // The best changes at 4 generations of 5 (too many changes to keep them all), and R
+        // reaches 1 at 40,001: that row stays.
+        let mut history = Vec::new();
+        let mut cost = 1e6;
+        for i in 0..200_000u64 {
+            if i % 5 != 0 {
+                cost -= 1.0;
+            }
+            let r = if i >= 40_001 { 1.0 } else { 0.5 };
+            history.push(row(i, cost, r));
+            thin_history(&mut history);
+            assert!(history.len() <= MAX_HISTORY_ROWS);
+        }
+        let first_full = history.iter().find(|h| h.best_reachability == 1.0).unwrap();
+        assert_eq!(first_full.evaluations, 32 * 40_001);
         // Every row a change: halved by position in the older half, first and last kept.
         let mut history: Vec<HistoryRow> = (0..=MAX_HISTORY_ROWS as u64)
             .map(|i| row(i, 1e6 - i as f64, 0.5))
