@@ -982,8 +982,11 @@ fn parse_stl(path: &Path, bytes: &[u8]) -> Result<MeshData, MeshError> {
         // the file has none, as Assimp-based readers such as coal and MoveIt read it).
         // Keywords are lower-case, as those readers need them.
         let mut normalised = b"solid mesh\n".to_vec();
-        let mut ended = false;
+        let (mut ended, mut closed) = (false, false);
         for line in rest.split_inclusive(|&b| b == b'\n') {
+            // A file without `endsolid` must have a facet to be taken as ASCII STL (a binary
+            // file whose header starts with `solid` may look like one line of text).
+            closed |= matches!(words(line).next(), Some(b"endsolid") | Some(b"endfacet"));
             match words(line).next() {
                 Some(b"endsolid") => ended = true,
                 Some(b"solid") if ended => ended = false,
@@ -1004,7 +1007,9 @@ fn parse_stl(path: &Path, bytes: &[u8]) -> Result<MeshData, MeshError> {
                 }
             }
         }
-        normalised.extend_from_slice(b"endsolid mesh\n");
+        if closed {
+            normalised.extend_from_slice(b"endsolid mesh\n");
+        }
         ("ASCII STL", Cow::Owned(normalised))
     } else {
         let format = "binary STL";
@@ -1155,6 +1160,7 @@ fn ascii_stl_error_line(bytes: &[u8]) -> Option<(usize, String, String)> {
     let start = solid_keyword_offset(bytes).unwrap_or(0);
     let before = bytes[..start].iter().filter(|&&b| b == b'\n').count();
     let mut next = Next::Header;
+    let mut facets = 0usize;
     let mut last = (0, String::new());
     for (number, raw) in bytes[start..].split(|&b| b == b'\n').enumerate() {
         let number = number + before;
@@ -1180,6 +1186,7 @@ fn ascii_stl_error_line(bytes: &[u8]) -> Option<(usize, String, String)> {
             }
             Next::Facet => {
                 next = Next::Loop;
+                facets += 1;
                 // The normal's values are not read (see `parse_stl`).
                 (words.len() != 5 || words[0] != "facet" || words[1] != "normal")
                     .then(|| "expected `facet normal x y z` or `endsolid`".to_string())
@@ -1226,8 +1233,12 @@ fn ascii_stl_error_line(bytes: &[u8]) -> Option<(usize, String, String)> {
         }
     }
     // A file may end after a whole facet without `endsolid`.
-    if matches!(next, Next::AfterEnd | Next::Facet) {
+    if next == Next::AfterEnd || (next == Next::Facet && facets > 0) {
         return None;
+    }
+    if next == Next::Header || next == Next::Facet {
+        let (line, text) = last;
+        return Some((line, "the file ends before `endsolid`".to_string(), text));
     }
     let (line, text) = last;
     Some((line, "the file ends inside a facet".to_string(), text))
@@ -2336,6 +2347,14 @@ f -3 -2 -1
         let open = format!("solid x\n{facet}{facet}").replacen("vertex 0 0 0", "vertex 0 0 1", 1);
         let open = write(&dir, "open.stl", open.as_bytes());
         assert_eq!(load_mesh(&open).unwrap().triangles.len(), 2);
+        // But a header alone (such as a binary file whose header starts with `solid` and has
+        // no NUL byte) is no mesh.
+        let header = write(&dir, "header.stl", b"solid x 1 2 3 garbage");
+        let message = load_err(&header);
+        assert!(
+            message.contains("line 1: the file ends before `endsolid`"),
+            "{message}"
+        );
         // Normals are not read (NaN is fine), and carriage returns alone end lines.
         let nan = good.replacen("facet normal 0 0 1", "facet normal nan inf -nan", 1);
         assert!(load_mesh(&write(&dir, "nan.stl", nan.as_bytes())).is_ok());
