@@ -30,6 +30,9 @@ pub struct Staged {
     files: Vec<(PathBuf, PathBuf, tempfile::NamedTempFile)>,
     /// Targets that are neither regular files nor directories, with their bytes.
     devices: Vec<(PathBuf, Vec<u8>)>,
+    /// Regular files of an earlier run that this output replaces by nothing, removed once the
+    /// others are in place.
+    stale: Vec<PathBuf>,
 }
 
 impl Staged {
@@ -89,8 +92,17 @@ impl Staged {
         Ok(())
     }
 
+    /// Stages the removal of `path` if it is a regular file (an earlier run's output that this
+    /// one does not write again), done by [`Staged::commit`] after the renames.
+    pub fn remove_stale(&mut self, path: &Path) {
+        if std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_file()) {
+            self.stale.push(path.to_path_buf());
+        }
+    }
+
     /// Writes the staged devices and pipes, then renames every temporary file over its
-    /// target. On an error the temporary files not yet renamed are removed.
+    /// target, then removes the stale files ([`Staged::remove_stale`]). On an error the
+    /// temporary files not yet renamed are removed.
     pub fn commit(self) -> Result<()> {
         for (path, bytes) in &self.devices {
             let write_err = |source| Error::Write {
@@ -110,6 +122,17 @@ impl Staged {
                 path,
                 source: e.error,
             })?;
+        }
+        for path in &self.stale {
+            match std::fs::remove_file(path) {
+                Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                    return Err(Error::Write {
+                        path: path.clone(),
+                        source: e,
+                    })
+                }
+                _ => {}
+            }
         }
         Ok(())
     }

@@ -197,7 +197,8 @@ pub fn check_trajectory_files(dir: &Path, indices: impl IntoIterator<Item = usiz
 }
 
 /// Writes `task_{index}.csv` and `task_{index}.json` into `dir` (created if missing) for every
-/// reached task of `report`, atomically; returns the files written.
+/// reached task of `report` with a path, atomically, and removes those of the other tasks left
+/// by an earlier run; returns the files written.
 pub fn write_trajectories(report: &ReachReport, dir: &Path) -> Result<Vec<PathBuf>> {
     let mut staged = crate::io::Staged::default();
     let written = stage_trajectories(report, dir, &mut staged)?;
@@ -220,7 +221,14 @@ pub fn stage_trajectories(
     check_trajectory_files(dir, report.targets.iter().map(|t| t.index))?;
     let mut written = Vec::new();
     for t in &report.targets {
-        let Some(path) = &t.path else { continue };
+        let Some(path) = &t.path else {
+            // An earlier run's files of a task this report has no path for would be taken
+            // for this run's: they go.
+            for file in trajectory_files(dir, t.index) {
+                staged.remove_stale(&file);
+            }
+            continue;
+        };
         let traj = Trajectory::from_path(path);
         let [csv, json] = trajectory_files(dir, t.index);
         staged.add(&csv, traj.to_csv().as_bytes())?;
@@ -310,6 +318,13 @@ mod tests {
             serde_json::from_str(&std::fs::read_to_string(&files[1]).unwrap()).unwrap();
         assert_eq!(back, Trajectory::from_path(&path()).to_ros());
         assert!(!out.join("task_0.csv").exists());
+        // An earlier run's files of a task that now has no path go; other files stay.
+        for name in ["task_0.csv", "task_0.json", "notes.txt"] {
+            std::fs::write(out.join(name), "earlier").unwrap();
+        }
+        write_trajectories(&report, &out).unwrap();
+        assert!(!out.join("task_0.csv").exists() && !out.join("task_0.json").exists());
+        assert!(out.join("notes.txt").exists() && out.join("task_1.json").exists());
     }
 
     #[test]
