@@ -508,12 +508,15 @@ fn a_reports_paths_are_bounded_in_total() {
     let r = reachability(&chain, &scene, &s.workspace.tasks, &config, 1, 0);
     assert_eq!(r.reached(), 1000);
     let joints = chain.dof();
-    let values: Vec<usize> = r
-        .targets
-        .iter()
-        .filter_map(|t| t.path.as_ref())
-        .map(|p| kinsynth::planning::reach::path_cost(p.points.len(), &p.joint_names))
-        .collect();
+    // What each kept path counts against the limit.
+    let costs_of = |r: &ReachReport| -> Vec<usize> {
+        r.targets
+            .iter()
+            .filter_map(|t| t.path.as_ref())
+            .map(|p| kinsynth::planning::reach::path_cost(p.points.len(), &p.joint_names))
+            .collect()
+    };
+    let values = costs_of(&r);
     let total: usize = values.iter().sum();
     assert!(total <= kinsynth::limits::MAX_REPORT_PATH_VALUES, "{total}");
     // The kept paths are the first ones, each longer than 100 points, and the next would not
@@ -536,12 +539,7 @@ fn a_reports_paths_are_bounded_in_total() {
         .map(|j| format!("{j}{}", "x".repeat(19_999)))
         .collect();
     kinsynth::import::urdf::rename_joints(&mut renamed, &long);
-    let costs: Vec<usize> = renamed
-        .targets
-        .iter()
-        .filter_map(|t| t.path.as_ref())
-        .map(|p| kinsynth::planning::reach::path_cost(p.points.len(), &p.joint_names))
-        .collect();
+    let costs = costs_of(&renamed);
     assert!(
         costs.len() < kept && !costs.is_empty(),
         "{} of {kept}",
