@@ -986,8 +986,13 @@ fn parse_stl(path: &Path, bytes: &[u8]) -> Result<MeshData, MeshError> {
         for line in rest.split_inclusive(|&b| b == b'\n') {
             // A file without `endsolid` must have a facet to be taken as ASCII STL (a binary
             // file whose header starts with `solid` may look like one line of text).
-            closed |= matches!(words(line).next(), Some(b"endsolid") | Some(b"endfacet"));
-            match words(line).next() {
+            // `endsolid` then anything, as Assimp reads it (a name after a no-break space).
+            let first = match words(line).next() {
+                Some(w) if w.starts_with(b"endsolid") => Some(&b"endsolid"[..]),
+                other => other,
+            };
+            closed |= matches!(first, Some(b"endsolid") | Some(b"endfacet"));
+            match first {
                 Some(b"endsolid") => ended = true,
                 Some(b"solid") if ended => ended = false,
                 None => {} // a blank line
@@ -2347,6 +2352,13 @@ f -3 -2 -1
         let open = format!("solid x\n{facet}{facet}").replacen("vertex 0 0 0", "vertex 0 0 1", 1);
         let open = write(&dir, "open.stl", open.as_bytes());
         assert_eq!(load_mesh(&open).unwrap().triangles.len(), 2);
+        // Two solids, the first ended by `endsolid` and a no-break space: both read (coal
+        // reads 2 triangles; the second solid was dropped).
+        let second = facet.replacen("vertex 0 0 0", "vertex 0 0 1", 1);
+        let two = format!("solid a\n{facet}endsolid\u{a0}a\nsolid b\n{second}endsolid b\n");
+        let two = write(&dir, "two.stl", two.as_bytes());
+        assert_eq!(load_mesh(&two).unwrap().triangles.len(), 2);
+        assert_eq!(count_triangles(&two), Some(2));
         // But a header alone (such as a binary file whose header starts with `solid` and has
         // no NUL byte) is no mesh.
         let header = write(&dir, "header.stl", b"solid x 1 2 3 garbage");
