@@ -59,7 +59,8 @@ pub struct TargetReport {
     /// The path from home, when reached (and kept: see `path_omitted`).
     pub path: Option<PathReport>,
     /// Why a reached task carries no path: the report's paths together would have exceeded
-    /// [`crate::limits::MAX_REPORT_PATH_VALUES`] values (points times joints).
+    /// [`crate::limits::MAX_REPORT_PATH_VALUES`] values (points times joints, and the joint
+    /// names: [`path_cost`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub path_omitted: Option<String>,
 }
@@ -387,8 +388,8 @@ fn plan(
     chain.fk(chain.home(), &mut home_frames);
     let origin = Point3::from(chain.base().translation.vector);
     let bound = chain.reach_bound();
-    // Paths are kept in task order while their points together stay within the limit; a
-    // reached task whose path would exceed it keeps its outcome and says why it has none.
+    // Paths are kept in task order while they together stay within the limit; a reached
+    // task whose path would exceed it keeps its outcome and says why it has none.
     let lengths = tree.path_lengths();
     let mut budget = crate::limits::MAX_REPORT_PATH_VALUES;
     let kept: Vec<bool> = growth
