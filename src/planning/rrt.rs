@@ -1040,6 +1040,7 @@ pub fn budgets(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::collision::CheckerKind;
     use crate::kinematics::{Axis, Dh, Link, Range};
     use nalgebra::IsometryMatrix3;
     use proptest::prelude::*;
@@ -1258,25 +1259,38 @@ mod tests {
         (s, chain, scene, tasks)
     }
 
+    /// A run of 300 iterations (its budget not grown) toward [`task_inside_an_obstacle`] with
+    /// the checker `kind`, its planner settings changed by `tune` and its planner by `cap`
+    /// (one of the work caps): what it grew, with the checker's counters.
+    fn capped_run(
+        kind: crate::collision::CheckerKind,
+        tune: impl Fn(&mut PlannerConfig),
+        cap: impl for<'r> Fn(Rrt<'r>) -> Rrt<'r>,
+    ) -> (Growth, crate::collision::EdgeStats) {
+        use crate::collision::{make_checker, BodyModel};
+        let (s, chain, scene, tasks) = task_inside_an_obstacle();
+        let checker = make_checker(kind, scene, BodyModel::Capsules);
+        let mut config = s.planner.clone();
+        config.checker = kind;
+        config.max_iterations = 300;
+        config.budget_growth = 1;
+        tune(&mut config);
+        let mut scratch = Scratch::new(&chain);
+        let rrt = cap(Rrt::new(&chain, checker.as_ref(), &config, &tasks));
+        let mut rng = rand::SeedableRng::seed_from_u64(4);
+        let growth = rrt.grow(&mut rng, &mut scratch);
+        (growth, scratch.stats)
+    }
+
     /// `ccd`'s work is capped: a run whose task lies inside an obstacle (so it would spend its
     /// whole budget) stops once its shape casts reach the cap, soon after (the cap is checked
     /// before each iteration, whose extensions may check several edges), and says so; with
     /// the real cap the same run spends its iteration budget.
     #[test]
     fn the_ccd_checkers_work_is_capped() {
-        use crate::collision::{make_checker, BodyModel, CheckerKind};
-        let (s, chain, scene, tasks) = task_inside_an_obstacle();
-        let mut config = s.planner.clone();
-        config.checker = CheckerKind::Ccd;
-        config.max_iterations = 300;
-        config.budget_growth = 1;
-        let checker = make_checker(CheckerKind::Ccd, scene, BodyModel::Capsules);
         let run = |cap: u64| {
-            let mut scratch = Scratch::new(&chain);
-            let rrt = Rrt::new(&chain, checker.as_ref(), &config, &tasks).with_cast_cap(cap);
-            let mut rng = rand::SeedableRng::seed_from_u64(4);
-            let growth = rrt.grow(&mut rng, &mut scratch);
-            (growth, scratch.stats.casts, scratch.stats.edges)
+            let (growth, stats) = capped_run(CheckerKind::Ccd, |_| {}, |r| r.with_cast_cap(cap));
+            (growth, stats.casts, stats.edges)
         };
         let (whole, casts, edges) = run(crate::limits::MAX_CCD_CASTS);
         assert!(!whole.work_limited);
@@ -1300,18 +1314,9 @@ mod tests {
     /// the scenario's `lambda` spends its iteration budget without coming near the cap.
     #[test]
     fn the_trees_nodes_are_capped() {
-        use crate::collision::{make_checker, BodyModel, CheckerKind};
-        let (s, chain, scene, tasks) = task_inside_an_obstacle();
-        let checker = make_checker(CheckerKind::Certified, scene, BodyModel::Capsules);
         let run = |lambda: f64| {
-            let mut config = s.planner.clone();
-            config.lambda = lambda;
-            config.max_iterations = 300;
-            config.budget_growth = 1;
-            let mut scratch = Scratch::new(&chain);
-            let rrt = Rrt::new(&chain, checker.as_ref(), &config, &tasks).with_node_cap(1_000);
-            let mut rng = rand::SeedableRng::seed_from_u64(4);
-            rrt.grow(&mut rng, &mut scratch)
+            let tune = |c: &mut PlannerConfig| c.lambda = lambda;
+            capped_run(CheckerKind::Certified, tune, |r| r.with_node_cap(1_000)).0
         };
         let tiny = run(1e6);
         assert!(tiny.node_limited);
@@ -1321,7 +1326,7 @@ mod tests {
             "{}",
             tiny.tree.len()
         );
-        let plain = run(s.planner.lambda);
+        let plain = run(task_inside_an_obstacle().0.planner.lambda);
         assert!(!plain.node_limited);
         assert_eq!(plain.iterations, 300);
         assert!(plain.tree.len() < 1_000, "{}", plain.tree.len());
@@ -1335,20 +1340,14 @@ mod tests {
     /// up to [`CONNECT_STEPS`] edges) and says so; with the real cap it spends its budget.
     #[test]
     fn the_body_tests_are_capped() {
-        use crate::collision::{make_checker, BodyModel, CheckerKind};
-        let (s, chain, scene, tasks) = task_inside_an_obstacle();
-        let checker = make_checker(CheckerKind::Certified, scene, BodyModel::Capsules);
-        let mut config = s.planner.clone();
-        config.max_iterations = 300;
-        config.budget_growth = 1;
+        let (_, chain, _, _) = task_inside_an_obstacle();
+        let scratch = Scratch::new(&chain);
+        let per_check = (scratch.body.len() + scratch.body.self_pairs().len()) as u64;
         let run = |cap: u64| {
-            let mut scratch = Scratch::new(&chain);
-            let per_check = (scratch.body.len() + scratch.body.self_pairs().len()) as u64;
-            let rrt =
-                Rrt::new(&chain, checker.as_ref(), &config, &tasks).with_tests_cap(cap * per_check);
-            let mut rng = rand::SeedableRng::seed_from_u64(4);
-            let growth = rrt.grow(&mut rng, &mut scratch);
-            (growth, scratch.stats.nodes + scratch.stats.edges)
+            let tests = cap * per_check;
+            let (growth, stats) =
+                capped_run(CheckerKind::Certified, |_| {}, |r| r.with_tests_cap(tests));
+            (growth, stats.nodes + stats.edges)
         };
         let (whole, checks) = run(crate::limits::MAX_BODY_TESTS);
         assert!(!whole.tests_limited);
@@ -1368,18 +1367,10 @@ mod tests {
     /// iteration) and says so; with the real cap it spends its budget.
     #[test]
     fn the_checkers_kinematics_are_capped() {
-        use crate::collision::{make_checker, BodyModel, CheckerKind};
-        let (s, chain, scene, tasks) = task_inside_an_obstacle();
-        let checker = make_checker(CheckerKind::Certified, scene, BodyModel::Capsules);
-        let mut config = s.planner.clone();
-        config.max_iterations = 300;
-        config.budget_growth = 1;
         let run = |cap: u64| {
-            let mut scratch = Scratch::new(&chain);
-            let rrt = Rrt::new(&chain, checker.as_ref(), &config, &tasks).with_fk_cap(cap);
-            let mut rng = rand::SeedableRng::seed_from_u64(4);
-            let growth = rrt.grow(&mut rng, &mut scratch);
-            (growth, scratch.stats.fk)
+            let (growth, stats) =
+                capped_run(CheckerKind::Certified, |_| {}, |r| r.with_fk_cap(cap));
+            (growth, stats.fk)
         };
         let (whole, fk) = run(crate::limits::MAX_CHECK_FK);
         assert!(!whole.fk_limited);
