@@ -1005,6 +1005,31 @@ fn self_collision_sampling_is_bounded_by_its_work() {
     // Undecided: the plates' pairs stay checked (all 249,001 of them).
     assert_eq!(plates_pair(acm), None);
     assert!(acm.pairs().len() >= 499 * 499, "{}", acm.pairs().len());
+    // Through the binary: a note says so, and the SRDF in a comment, leaving the pair enabled.
+    let srdf = dir.path().join("plates.srdf");
+    let out = Command::new(env!("CARGO_BIN_EXE_kinsynth"))
+        .arg("reach")
+        .arg(root().join("examples/scenarios/ur5-cell.toml"))
+        .arg("--urdf")
+        .arg(dir.path().join("plates499.urdf"))
+        .arg("--write-srdf")
+        .arg(&srdf)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains(&format!(
+            "the self-collision sampling stopped after {taken} random configurations"
+        )) && stderr.contains("the pairs it had not decided stay checked"),
+        "{stderr}"
+    );
+    let text = std::fs::read_to_string(&srdf).unwrap();
+    assert!(
+        text.contains("the pairs it had not decided stay enabled -->"),
+        "{text}"
+    );
+    assert!(!text.contains("link1=\"a\" link2=\"b\""), "{text}");
     // Three plates: every sample taken (they touch in about 98 % of them).
     let r = import(3, most);
     let acm = r.body.acm();
