@@ -275,7 +275,7 @@ fn merge_refuses_numbers_out_of_range_naming_file_field_and_value() {
         text
     };
     type Edit = fn(&mut serde_json::Value);
-    let cases: [(&str, Edit, &str); 10] = [
+    let cases: [(&str, Edit, &str); 11] = [
         (
             "best.json",
             |v| v["reachability"] = 1e308.into(),
@@ -325,6 +325,12 @@ fn merge_refuses_numbers_out_of_range_naming_file_field_and_value() {
             "checkpoint.json",
             |v| v["history"][0]["best_cost"] = (-3.0).into(),
             "checkpoint.json: history[0].best_cost = -3",
+        ),
+        // In its range, but not what the run wrote: its checksum tells.
+        (
+            "checkpoint.json",
+            |v| v["history"][0]["best_cost"] = 1.5.into(),
+            "checkpoint.json: checksum = fnv1a64:",
         ),
     ];
     for (file, f, part) in cases {

@@ -537,6 +537,12 @@ fn a_stopped_job_resumes_to_the_uninterrupted_result_and_refuses_another_number_
     };
     let mut small_swarm = checkpoint.clone();
     small_swarm.state[1]["params"]["swarm"] = serde_json::json!(1);
+    // Read from a file whose content no longer matches its checksum.
+    let mut changed = checkpoint.clone();
+    changed.integrity = kinsynth::optimize::runner::Integrity::Changed {
+        recorded: "fnv1a64:0".into(),
+        now: "fnv1a64:1".into(),
+    };
     for (bad, says) in [
         (
             with_migration(2, 1_000_000_000),
@@ -547,6 +553,10 @@ fn a_stopped_job_resumes_to_the_uninterrupted_result_and_refuses_another_number_
             "islands.migration.interval = 0: must be at least 1",
         ),
         (small_swarm, "state[1].params.swarm = 1"),
+        (
+            changed,
+            "checksum = fnv1a64:0: the content hashes to fnv1a64:1: the checkpoint was changed",
+        ),
     ] {
         let err = IslandJob::new(&runner, 2, migration)
             .run(

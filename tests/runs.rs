@@ -179,10 +179,12 @@ fn a_checkpoint_state_of_the_wrong_length_is_an_error_not_a_panic() {
     .unwrap());
     let path = out.join("checkpoint.json");
     let mut c = json(&path);
-    // As an older checkpoint without the binding, with one value too few in an individual.
+    // As an older checkpoint without the binding and the checksum, with one value too few in
+    // an individual.
     let o = c.as_object_mut().unwrap();
     o.remove("scenario_hash");
     o.remove("scenario_shape");
+    o.remove("checksum");
     let unbound = c.clone();
     c["state"]["population"][3]["x"]
         .as_array_mut()
@@ -203,6 +205,7 @@ fn a_checkpoint_state_of_the_wrong_length_is_an_error_not_a_panic() {
         e.contains("warning:") && e.contains("records no scenario hash"),
         "{e}"
     );
+    assert!(e.contains("records no checksum"), "{e}");
     // Planner settings out of their domain are refused too.
     ok(&optimize(
         &paper_2d(),
@@ -333,6 +336,157 @@ fn a_checkpoint_state_of_the_wrong_length_is_an_error_not_a_panic() {
             "cannot read the scenario this checkpoint records",
         ],
     );
+}
+
+/// A checkpoint changed after the run wrote it is refused by its checksum, even where every
+/// value stays in its domain (it would resume to another result without a word); values out
+/// of the run's domain are named by themselves: design values outside the bounds, starting
+/// designs other than the scenario's, a particle faster than the swarm allows, a negative
+/// annealing time. The same content written another way resumes as written.
+#[test]
+fn a_changed_checkpoint_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut runs = Vec::new();
+    for algorithm in ["ga", "pso", "asa"] {
+        let out = dir.path().join(algorithm);
+        ok(&optimize(
+            &paper_2d(),
+            &out,
+            &[
+                "--optimizer",
+                algorithm,
+                "--evaluations",
+                "40",
+                "--recheck-seeds",
+                "1",
+            ],
+        )
+        .output()
+        .unwrap());
+        runs.push(out);
+    }
+    let path = |out: &Path| out.join("checkpoint.json");
+    let write = |out: &Path, v: &serde_json::Value| {
+        std::fs::write(path(out), serde_json::to_string(v).unwrap()).unwrap()
+    };
+    let [ga, pso, asa] = [&runs[0], &runs[1], &runs[2]];
+    let original = json(&path(ga));
+    assert!(original["checksum"]
+        .as_str()
+        .is_some_and(|c| c.starts_with("fnv1a64:")));
+    // Values in their domain, each changed alone: the evaluations done, the seed, a design
+    // value within its bounds (-0 for 0), the generations without improvement.
+    type Edit = fn(&mut serde_json::Value);
+    let edits: [(&str, Edit); 4] = [
+        ("evaluations", |c| c["evaluations"] = serde_json::json!(10)),
+        ("seed", |c| c["options"]["seed"] = serde_json::json!(5)),
+        ("-0", |c| {
+            let population = c["state"]["population"].as_array_mut().unwrap();
+            let zero = population
+                .iter_mut()
+                .flat_map(|e| e["x"].as_array_mut().unwrap())
+                .find(|v| v.as_f64() == Some(0.0))
+                .expect("a design value at 0");
+            *zero = serde_json::json!(-0.0);
+        }),
+        ("stale", |c| c["stale"] = serde_json::json!(1000000)),
+    ];
+    for (what, edit) in edits {
+        let mut c = original.clone();
+        edit(&mut c);
+        write(ga, &c);
+        let o = resume(ga, &[]);
+        assert_eq!(o.status.code(), Some(1), "{what}: {}", stderr(&o));
+        one_line_error(
+            &o,
+            &[
+                "checkpoint.json: checksum = fnv1a64:",
+                "the content hashes to fnv1a64:",
+                "was changed after the run wrote it",
+            ],
+        );
+    }
+    // Out of the domain: named by the value.
+    let mut c = original.clone();
+    c["state"]["population"][1]["x"][2] = serde_json::json!(-1e300);
+    write(ga, &c);
+    one_line_error(
+        &resume(ga, &[]),
+        &["state.population[1].x[2] = -1e300: outside the design space's [0, 0.25]"],
+    );
+    let mut c = original.clone();
+    c["state"]["seeds"][0][3] = serde_json::json!(0.1);
+    write(ga, &c);
+    one_line_error(
+        &resume(ga, &[]),
+        &["state.seeds[0][3] = 0.1: the scenario's starting design has 0.25"],
+    );
+    let mut c = json(&path(pso));
+    c["state"]["particles"][0]["v"][1] = serde_json::json!(0.2);
+    write(pso, &c);
+    one_line_error(
+        &resume(pso, &[]),
+        &["state.particles[0].v[1] = 0.2: beyond the largest velocity"],
+    );
+    let mut c = json(&path(asa));
+    c["state"]["k"][4] = serde_json::json!(-3.0);
+    write(asa, &c);
+    one_line_error(
+        &resume(asa, &[]),
+        &["state.k[4] = -3: must not be negative"],
+    );
+    // The same content, laid out another way: resumes, and to the result of the unchanged
+    // checkpoint.
+    let copy = dir.path().join("copy");
+    std::fs::create_dir(&copy).unwrap();
+    for f in ["checkpoint.json", "best.json", "history.csv"] {
+        std::fs::copy(ga.join(f), copy.join(f)).unwrap();
+    }
+    std::fs::write(
+        path(&copy),
+        serde_json::to_string_pretty(&original).unwrap(),
+    )
+    .unwrap();
+    write(ga, &original);
+    ok(&resume(ga, &["--evaluations", "70"]));
+    let o = resume(&copy, &["--evaluations", "70"]);
+    ok(&o);
+    assert!(!stderr(&o).contains("warning"), "{}", stderr(&o));
+    assert_eq!(best_without_time(ga), best_without_time(&copy));
+}
+
+/// A budget extended on resume reproduces the uninterrupted run only where nothing follows
+/// the share of the budget spent: PSO's inertia does, so extending a swarm's run says that its
+/// result will differ; a GA's does not, and says nothing. Resuming with the same budget (a
+/// killed run) says nothing either.
+#[test]
+fn extending_a_budget_warns_where_the_schedule_follows_it() {
+    let dir = tempfile::tempdir().unwrap();
+    for (algorithm, warns) in [("pso", true), ("ga", false)] {
+        let out = dir.path().join(algorithm);
+        let args = ["--optimizer", algorithm, "--recheck-seeds", "1"];
+        ok(&optimize(
+            &paper_2d(),
+            &out,
+            &[&args[..], &["--evaluations", "40"]].concat(),
+        )
+        .output()
+        .unwrap());
+        let same = resume(&out, &[]);
+        ok(&same);
+        assert!(!stderr(&same).contains("warning"), "{}", stderr(&same));
+        let extended = resume(&out, &["--evaluations", "70"]);
+        ok(&extended);
+        let e = stderr(&extended);
+        assert_eq!(
+            e.contains("warning:")
+                && e.contains("the evaluation budget changes from 40 to 70")
+                && e.contains("the swarm's inertia follows")
+                && e.contains("differs from that of an uninterrupted run of 70 evaluations"),
+            warns,
+            "{algorithm}: {e}"
+        );
+    }
 }
 
 #[test]

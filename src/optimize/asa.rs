@@ -18,8 +18,9 @@
 
 use super::{
     best_distinct, check_evaluated, check_len, check_points, keep_best, random_point, Cut,
-    Evaluated, Optimizer, StepContext, StepReport,
+    Evaluated, Optimizer, StateSpace, StepContext, StepReport,
 };
+use crate::error::Num;
 use crate::limits::{MAX_POPULATION, MAX_SETTING};
 use crate::scenario::{check, check_count, check_positive_within};
 use rand::RngExt;
@@ -308,16 +309,35 @@ impl Optimizer for Asa {
         keep_best(&mut self.best, &first);
     }
 
-    fn validate(&self, dim: usize) -> Result<(), String> {
+    fn validate(&self, space: &StateSpace<'_>) -> Result<(), String> {
         self.params.check("params.").map_err(|e| e.to_string())?;
-        check_points(&self.seeds, self.best.as_ref(), dim)?;
+        check_points(&self.seeds, self.best.as_ref(), space)?;
         if let Some(c) = &self.current {
-            check_evaluated("current", c, dim)?;
-            check_len("k", &self.k, dim)?;
-            check_len("t0", &self.t0, dim)?;
+            check_evaluated("current", c, space)?;
+            check_len("k", &self.k, space.dim())?;
+            check_len("t0", &self.t0, space.dim())?;
             if self.best.is_none() {
                 return Err("best is missing while current is set".into());
             }
+        }
+        // Annealing times count up from 0 and temperatures start positive.
+        let times = self
+            .k
+            .iter()
+            .enumerate()
+            .map(|(i, &v)| (format!("k[{i}]"), v));
+        let times = times.chain([("k_accept".to_string(), self.k_accept)]);
+        if let Some((name, v)) = times.clone().find(|(_, v)| v.is_nan() || *v < 0.0) {
+            return Err(format!("{name} = {}: must not be negative", Num(v)));
+        }
+        let temps = self
+            .t0
+            .iter()
+            .enumerate()
+            .map(|(i, &v)| (format!("t0[{i}]"), v));
+        let mut temps = temps.chain([("t0_accept".to_string(), self.t0_accept)]);
+        if let Some((name, v)) = temps.find(|(_, v)| v.is_nan() || *v <= 0.0) {
+            return Err(format!("{name} = {}: must be positive", Num(v)));
         }
         Ok(())
     }

@@ -529,8 +529,11 @@ pub fn merge(dirs: &[std::path::PathBuf], out: &Path) -> Result<Vec<RunRecord>> 
                 .in_file(&best));
             }
             summary.elapsed_s = read_elapsed(&run_dir.join(super::runner::files::TIME))?;
-            // The checkpoint's history is checked as it is read.
-            let history = Runner::read_checkpoint(&run_dir)?.history;
+            // The checkpoint's history is checked as it is read, and its content against its
+            // checksum.
+            let checkpoint = Runner::read_checkpoint(&run_dir)?;
+            checkpoint.check_integrity(&run_dir.join(super::runner::files::CHECKPOINT))?;
+            let history = checkpoint.history;
             records.push(RunRecord {
                 workspace: w,
                 method: k,

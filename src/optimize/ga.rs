@@ -4,7 +4,7 @@
 
 use super::{
     best_distinct, check_evaluated, check_points, keep_best, random_point, Evaluated, Optimizer,
-    StepContext, StepReport,
+    StateSpace, StepContext, StepReport,
 };
 use crate::limits::{MAX_POPULATION, MAX_SETTING};
 use crate::scenario::{check, check_count, check_non_negative_within};
@@ -284,11 +284,11 @@ impl Optimizer for Ga {
         }
     }
 
-    fn validate(&self, dim: usize) -> Result<(), String> {
+    fn validate(&self, space: &StateSpace<'_>) -> Result<(), String> {
         self.params.check("params.").map_err(|e| e.to_string())?;
-        check_points(&self.seeds, self.best.as_ref(), dim)?;
+        check_points(&self.seeds, self.best.as_ref(), space)?;
         for (i, e) in self.population.iter().enumerate() {
-            check_evaluated(&format!("population[{i}]"), e, dim)?;
+            check_evaluated(&format!("population[{i}]"), e, space)?;
         }
         if !self.population.is_empty() && self.best.is_none() {
             return Err("best is missing while the population is not empty".into());

@@ -665,6 +665,7 @@ impl<'r, 'a> IslandJob<'r, 'a> {
                 evaluations,
             });
         }
+        setup.check_content()?;
         if rank == 0 {
             setup.warn();
         }

@@ -290,10 +290,53 @@ pub trait Optimizer: Send {
     /// best; velocities are kept), or the current point if the best of them is better (ASA).
     /// The best so far is updated.
     fn immigrate(&mut self, migrants: &[Evaluated]);
-    /// Checks a restored state against a problem of dimension `dim`: every point and vector
-    /// has `dim` values, every index is in range. The error names the field of the state, e.g.
-    /// `population[3].x has 10 values, the problem 8`.
-    fn validate(&self, dim: usize) -> Result<(), String>;
+    /// Checks a restored state against the problem it continues (`space`): every point and
+    /// vector has the problem's dimension, every index is in range, every point lies in the
+    /// bounds (a coordinate outside them only where a starting design has it), the starting
+    /// designs are the problem's, and the optimiser's own numbers lie where it keeps them. The
+    /// error names the field of the state, e.g. `population[3].x has 10 values, the design
+    /// space 8`.
+    fn validate(&self, space: &StateSpace<'_>) -> Result<(), String>;
+}
+
+/// What a restored optimiser state is checked against ([`Optimizer::validate`]): the
+/// problem's bounds and the starting designs every run of it begins from.
+#[derive(Clone, Copy, Debug)]
+pub struct StateSpace<'a> {
+    /// Lower bounds.
+    pub lower: &'a [f64],
+    /// Upper bounds.
+    pub upper: &'a [f64],
+    /// The starting designs, as the optimisers are given them (`seeds`).
+    pub seeds: &'a [Vec<f64>],
+}
+
+impl StateSpace<'_> {
+    /// The problem's dimension.
+    pub fn dim(&self) -> usize {
+        self.lower.len()
+    }
+}
+
+/// Checks that the point `x` (the state field `field`) has the problem's dimension, finite
+/// values, and each value within its bounds or equal to a starting design's (decoding a
+/// design can leave a starting design's value outside the bounds, and the optimisers copy
+/// values unchanged).
+pub(crate) fn check_point(field: &str, x: &[f64], space: &StateSpace<'_>) -> Result<(), String> {
+    check_len(field, x, space.dim())?;
+    for (i, &v) in x.iter().enumerate() {
+        let (lo, hi) = (space.lower[i], space.upper[i]);
+        let inside = lo <= v && v <= hi;
+        if !inside && !space.seeds.iter().any(|s| s.get(i) == Some(&v)) {
+            return Err(format!(
+                "{field}[{i}] = {}: outside the design space's [{}, {}]",
+                crate::error::Num(v),
+                crate::error::Num(lo),
+                crate::error::Num(hi)
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Checks that `v` (the state field `field`) has `dim` finite values.
@@ -310,10 +353,15 @@ pub(crate) fn check_len(field: &str, v: &[f64], dim: usize) -> Result<(), String
     Ok(())
 }
 
-/// Checks an evaluated point of a restored state: `dim` finite values, a finite cost that is not
-/// negative (paper Eq. 23 sums non-negative terms), and `R` and the progress within [0, 1].
-pub(crate) fn check_evaluated(field: &str, e: &Evaluated, dim: usize) -> Result<(), String> {
-    check_len(&format!("{field}.x"), &e.x, dim)?;
+/// Checks an evaluated point of a restored state: a point of the design space
+/// ([`check_point`]), a finite cost that is not negative (paper Eq. 23 sums non-negative
+/// terms), and `R` and the progress within [0, 1].
+pub(crate) fn check_evaluated(
+    field: &str,
+    e: &Evaluated,
+    space: &StateSpace<'_>,
+) -> Result<(), String> {
+    check_point(&format!("{field}.x"), &e.x, space)?;
     if !(e.cost.is_finite() && e.cost >= 0.0) {
         return Err(format!(
             "{field}.cost = {}: must be finite and not negative",
@@ -331,17 +379,34 @@ pub(crate) fn check_evaluated(field: &str, e: &Evaluated, dim: usize) -> Result<
     Ok(())
 }
 
-/// Checks an optional incumbent and the seed points of a restored state.
+/// Checks the seed points of a restored state (the problem's starting designs, as every run
+/// of it begins) and its optional incumbent.
 pub(crate) fn check_points(
     seeds: &[Vec<f64>],
     best: Option<&Evaluated>,
-    dim: usize,
+    space: &StateSpace<'_>,
 ) -> Result<(), String> {
     for (i, x) in seeds.iter().enumerate() {
-        check_len(&format!("seeds[{i}]"), x, dim)?;
+        check_len(&format!("seeds[{i}]"), x, space.dim())?;
+    }
+    if seeds.len() != space.seeds.len() {
+        return Err(format!(
+            "seeds has {} points, the scenario's starting designs {}",
+            seeds.len(),
+            space.seeds.len()
+        ));
+    }
+    for (i, (x, want)) in seeds.iter().zip(space.seeds).enumerate() {
+        if let Some(k) = (0..x.len()).find(|&k| x[k] != want[k]) {
+            return Err(format!(
+                "seeds[{i}][{k}] = {}: the scenario's starting design has {}",
+                crate::error::Num(x[k]),
+                crate::error::Num(want[k])
+            ));
+        }
     }
     if let Some(b) = best {
-        check_evaluated("best", b, dim)?;
+        check_evaluated("best", b, space)?;
     }
     Ok(())
 }

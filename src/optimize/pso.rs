@@ -9,9 +9,10 @@
 //! * `global`: the classic swarm, pulled toward its own best and the swarm's best.
 
 use super::{
-    best_distinct, check_evaluated, check_len, check_points, keep_best, random_point, Evaluated,
-    Optimizer, StepContext, StepReport,
+    best_distinct, check_evaluated, check_len, check_point, check_points, keep_best, random_point,
+    Evaluated, Optimizer, StateSpace, StepContext, StepReport,
 };
+use crate::error::Num;
 use crate::limits::{MAX_POPULATION, MAX_SETTING};
 use crate::scenario::{check_count, check_non_negative_within};
 use rand::RngExt;
@@ -329,14 +330,25 @@ impl Optimizer for Pso {
         }
     }
 
-    fn validate(&self, dim: usize) -> Result<(), String> {
+    fn validate(&self, space: &StateSpace<'_>) -> Result<(), String> {
         self.params.check("params.").map_err(|e| e.to_string())?;
-        check_points(&self.seeds, self.best.as_ref(), dim)?;
-        let n = self.particles.len();
+        check_points(&self.seeds, self.best.as_ref(), space)?;
+        let (n, dim) = (self.particles.len(), space.dim());
         for (i, p) in self.particles.iter().enumerate() {
-            check_len(&format!("particles[{i}].x"), &p.x, dim)?;
+            check_point(&format!("particles[{i}].x"), &p.x, space)?;
             check_len(&format!("particles[{i}].v"), &p.v, dim)?;
-            check_evaluated(&format!("particles[{i}].best"), &p.best, dim)?;
+            // A velocity is clamped to `max_velocity` times its variable's range.
+            for (k, &v) in p.v.iter().enumerate() {
+                let vmax = self.params.max_velocity * (space.upper[k] - space.lower[k]);
+                if v.is_nan() || v.abs() > vmax {
+                    return Err(format!(
+                        "particles[{i}].v[{k}] = {}: beyond the largest velocity {}",
+                        Num(v),
+                        Num(vmax)
+                    ));
+                }
+            }
+            check_evaluated(&format!("particles[{i}].best"), &p.best, space)?;
             if !p.exemplar.is_empty() && p.exemplar.len() != dim {
                 return Err(format!(
                     "particles[{i}].exemplar has {} values, the design space {dim}",

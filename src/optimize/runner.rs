@@ -181,6 +181,48 @@ pub struct Checkpoint {
     /// An island job's islands (then `state` is the array of their states, island by island).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub islands: Option<super::islands::IslandsCheckpoint>,
+    /// FNV-1a hash of the checkpoint's own content ([`content_hash`]), which a resume checks:
+    /// a checkpoint changed after the run wrote it (a hand edit, a flipped bit that leaves
+    /// valid JSON) would resume to another result without a word.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub checksum: Option<String>,
+    /// What [`Checkpoint::checksum`] says of the content read (not part of the file).
+    #[serde(skip)]
+    pub integrity: Integrity,
+}
+
+/// What a checkpoint's [`Checkpoint::checksum`] says of the content read.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub enum Integrity {
+    /// The content hashes to the recorded checksum (or the checkpoint was not read from a
+    /// file).
+    #[default]
+    Intact,
+    /// No checksum is recorded (an older version wrote the checkpoint).
+    Unsealed,
+    /// The content has changed since it was written: it hashes to `now`, the checkpoint
+    /// records `recorded`.
+    Changed {
+        /// The checksum the checkpoint records.
+        recorded: String,
+        /// The hash of its content.
+        now: String,
+    },
+}
+
+/// The hash [`Checkpoint::checksum`] records: [`fingerprint`] of the checkpoint's JSON value
+/// without its `checksum` key, written compactly with its keys sorted (as `serde_json` holds
+/// them), so that the file's own layout does not matter.
+pub fn content_hash(value: &serde_json::Value) -> String {
+    let text = match value {
+        serde_json::Value::Object(map) if map.contains_key("checksum") => {
+            let mut map = map.clone();
+            map.remove("checksum");
+            serde_json::Value::Object(map).to_string()
+        }
+        v => v.to_string(),
+    };
+    fingerprint(text.as_bytes())
 }
 
 /// One free design variable as a checkpoint records it.
@@ -400,12 +442,12 @@ fn from_value_at<T: serde::de::DeserializeOwned>(
     })
 }
 
-/// Restores the optimiser of a checkpoint and checks its state against the design space's
-/// dimension `dim`. Errors name the state's field.
+/// Restores the optimiser of a checkpoint and checks its state against the design space
+/// ([`Optimizer::validate`]). Errors name the state's field.
 fn load_optimizer(
     algorithm: Algorithm,
     state: serde_json::Value,
-    dim: usize,
+    space: &crate::design::DesignSpace,
 ) -> Result<Box<dyn Optimizer>> {
     let bad = |m: String| Error::Parse {
         file: PathBuf::new(),
@@ -416,7 +458,13 @@ fn load_optimizer(
         Algorithm::Pso => Box::new(from_value_at::<Pso>(state).map_err(bad)?),
         Algorithm::Asa => Box::new(from_value_at::<Asa>(state).map_err(bad)?),
     };
-    optimizer.validate(dim).map_err(|m| Error::Parse {
+    let (lower, upper, seeds) = (space.lower(), space.upper(), initial_designs(space));
+    let bounds = super::StateSpace {
+        lower: &lower,
+        upper: &upper,
+        seeds: &seeds,
+    };
+    optimizer.validate(&bounds).map_err(|m| Error::Parse {
         file: PathBuf::new(),
         message: format!("state.{m}"),
     })?;
@@ -542,16 +590,50 @@ pub(crate) struct Setup {
     pub hash: String,
     /// The scenario's shape.
     pub shape: ScenarioShape,
-    /// A warning about the checkpoint resumed, printed once the whole checkpoint is known to
+    /// Warnings about the checkpoint resumed, printed once the whole checkpoint is known to
     /// be good (an error about it then stays alone on one line).
-    pub warning: Option<String>,
+    pub warnings: Vec<String>,
+    /// The error of a resumed checkpoint whose content has changed since it was written
+    /// ([`Integrity::Changed`]), raised by [`Setup::check_content`] once the rest of the
+    /// checkpoint has been checked (a value out of its domain is named by itself first).
+    changed: Option<(PathBuf, String, String)>,
 }
 
 impl Setup {
-    /// Prints the warning, if any, to standard error (once the checkpoint has loaded).
+    /// Prints the warnings, if any, to standard error (once the checkpoint has loaded).
     pub(crate) fn warn(&self) {
-        if let Some(w) = &self.warning {
+        for w in &self.warnings {
             eprintln!("warning: {w}");
+        }
+    }
+
+    /// Refuses a resumed checkpoint whose content has changed since the run wrote it.
+    pub(crate) fn check_content(&self) -> Result<()> {
+        match &self.changed {
+            None => Ok(()),
+            Some((path, recorded, now)) => Err(changed_error(path, recorded, now)),
+        }
+    }
+}
+
+/// The error about the checkpoint `path` whose content hashes to `now` where it records
+/// `recorded` ([`Integrity::Changed`]).
+pub(crate) fn changed_error(path: &Path, recorded: &str, now: &str) -> Error {
+    Error::invalid(
+        "checksum",
+        recorded,
+        format!("the content hashes to {now}: the checkpoint was changed after the run wrote it, and would resume to another result; use the checkpoint as written"),
+    )
+    .in_file(path)
+}
+
+impl Checkpoint {
+    /// Refuses a checkpoint (read from `path`) whose content has changed since it was
+    /// written; one that records no checksum passes.
+    pub fn check_integrity(&self, path: &Path) -> Result<()> {
+        match &self.integrity {
+            Integrity::Changed { recorded, now } => Err(changed_error(path, recorded, now)),
+            Integrity::Intact | Integrity::Unsealed => Ok(()),
         }
     }
 }
@@ -680,13 +762,23 @@ impl<'a> Runner<'a> {
             message: e.to_string(),
         };
         let mut v: serde_json::Value = serde_json::from_str(&text).map_err(parse)?;
+        // The content as written, before anything read is filled in.
+        let now = content_hash(&v);
         if let Some(planner) = v.get_mut("planner") {
             clamping_unless_recorded(planner);
         }
-        let c: Checkpoint = from_value_at(v).map_err(|m| Error::Parse {
+        let mut c: Checkpoint = from_value_at(v).map_err(|m| Error::Parse {
             file: path.clone(),
             message: m.trim_start_matches(['.', ':', ' ']).to_string(),
         })?;
+        c.integrity = match &c.checksum {
+            None => Integrity::Unsealed,
+            Some(recorded) if *recorded == now => Integrity::Intact,
+            Some(recorded) => Integrity::Changed {
+                recorded: recorded.clone(),
+                now,
+            },
+        };
         c.planner.validate().map_err(|e| e.in_file(&path))?;
         // The time limit of a resumed run counts from the seconds already spent: a negative
         // or non-finite count would never (or at once) reach it.
@@ -735,8 +827,9 @@ impl<'a> Runner<'a> {
                     )
                     .in_file(self.checkpoint_path()));
                 }
-                let optimizer = load_optimizer(o.algorithm, c.state, self.scenario.space.dim())
+                let optimizer = load_optimizer(o.algorithm, c.state, &self.scenario.space)
                     .map_err(|e| e.in_file(self.checkpoint_path()))?;
+                setup.check_content()?;
                 setup.warn();
                 (
                     optimizer,
@@ -902,12 +995,26 @@ impl<'a> Runner<'a> {
                 })?;
         let hash = fingerprint(&scenario_bytes);
         let shape = ScenarioShape::of(self.scenario);
-        let mut warning = None;
+        let (mut warnings, mut changed) = (Vec::new(), None);
         if let Some(c) = resume {
-            warning = self
-                .check_binding(c, &hash, &shape)
-                .map_err(|e| e.in_file(&checkpoint_path))?;
+            warnings.extend(
+                self.check_binding(c, &hash, &shape)
+                    .map_err(|e| e.in_file(&checkpoint_path))?,
+            );
             check_planner(&self.planner).map_err(|e| e.in_file(&checkpoint_path))?;
+            match &c.integrity {
+                Integrity::Intact => {}
+                Integrity::Unsealed => warnings.push(format!(
+                    "{}: the checkpoint records no checksum (an older version wrote it); changes made to it since are not detected",
+                    checkpoint_path.display()
+                )),
+                Integrity::Changed { recorded, now } => {
+                    changed = Some((checkpoint_path.clone(), recorded.clone(), now.clone()))
+                }
+            }
+            if let Some(w) = self.schedule_moved(c) {
+                warnings.push(format!("{}: {w}", checkpoint_path.display()));
+            }
         }
         // Resumed, the options are the checkpoint's (with the budgets given anew).
         let section = if resume.is_some() { "options." } else { "" };
@@ -921,7 +1028,8 @@ impl<'a> Runner<'a> {
             objective,
             hash,
             shape,
-            warning,
+            warnings,
+            changed,
         })
     }
 
@@ -933,7 +1041,7 @@ impl<'a> Runner<'a> {
 
     /// Restores an optimiser of the run's algorithm from a checkpoint's state.
     pub(crate) fn load_optimizer(&self, state: serde_json::Value) -> Result<Box<dyn Optimizer>> {
-        load_optimizer(self.options.algorithm, state, self.scenario.space.dim())
+        load_optimizer(self.options.algorithm, state, &self.scenario.space)
     }
 
     /// Why the run stops before its next generation, if it does: Ctrl-C, a budget spent, or
@@ -1051,6 +1159,28 @@ impl<'a> Runner<'a> {
         Ok(summary)
     }
 
+    /// Why a run resumed from `c` with another evaluation budget does not end where an
+    /// uninterrupted run with that budget would, if it does not: what follows the share of the
+    /// budget spent (a swarm's inertia, the planner's schedule) has followed the old budget's
+    /// so far. GA and ASA without a planner schedule take nothing from the budget but when to
+    /// stop.
+    fn schedule_moved(&self, c: &Checkpoint) -> Option<String> {
+        let (was, now) = (c.options.evaluations?, self.options.evaluations?);
+        let pso = self.options.algorithm == Algorithm::Pso;
+        let schedule = self.planner.schedule.is_some();
+        if was == now || !(pso || schedule) {
+            return None;
+        }
+        let what = match (pso, schedule) {
+            (true, true) => "the swarm's inertia and the planner's schedule follow",
+            (true, false) => "the swarm's inertia follows",
+            _ => "the planner's schedule follows",
+        };
+        Some(format!(
+            "the evaluation budget changes from {was} to {now}, and {what} the share of the budget spent: the run goes on by the new budget from here, so its result differs from that of an uninterrupted run of {now} evaluations"
+        ))
+    }
+
     /// Refuses a checkpoint that does not belong to the scenario: another file, or the same
     /// file edited since the run started. The error says what changed. A checkpoint that
     /// records no hash gives a warning instead.
@@ -1163,6 +1293,13 @@ impl<'a> Runner<'a> {
             scenario_hash: Some(setup.hash.clone()),
             scenario_shape: Some(setup.shape.clone()),
             islands,
+            checksum: None,
+            integrity: Integrity::Intact,
+        };
+        let value = serde_json::to_value(&c).expect("a checkpoint serialises");
+        let c = Checkpoint {
+            checksum: Some(content_hash(&value)),
+            ..c
         };
         let json = serde_json::to_string(&c).expect("a checkpoint serialises");
         write_atomic(&self.out.join(files::CHECKPOINT), json.as_bytes())
@@ -1483,6 +1620,8 @@ mod tests {
             scenario_hash: None,
             scenario_shape: None,
             islands: None,
+            checksum: None,
+            integrity: Integrity::Intact,
         };
         let mut v = serde_json::to_value(&c).unwrap();
         let path = dir.path().join(files::CHECKPOINT);
