@@ -24,10 +24,34 @@ where
     serde_path_to_error::deserialize(Strict(de))
 }
 
+/// The path of a [`deserialize`] error's field, as `serde_path_to_error` writes it
+/// (`targets[5].path`), without the segments it could not name (a syntax error where a key
+/// should be: `targets[5].?`), and `.` for the whole value.
+pub fn path<E>(e: &serde_path_to_error::Error<E>) -> String {
+    use serde_path_to_error::Segment;
+    let mut out = String::new();
+    for segment in e.path() {
+        match segment {
+            Segment::Seq { index } => out.push_str(&format!("[{index}]")),
+            Segment::Map { key } | Segment::Enum { variant: key } => {
+                if !out.is_empty() {
+                    out.push('.');
+                }
+                out.push_str(key);
+            }
+            Segment::Unknown => {}
+        }
+    }
+    if out.is_empty() {
+        out.push('.');
+    }
+    out
+}
+
 /// The message of a [`deserialize`] error: `path: what`, or only `what` when the whole value is
 /// at fault (its path is `.`).
 pub fn message<E: fmt::Display>(e: &serde_path_to_error::Error<E>) -> String {
-    let path = e.path().to_string();
+    let path = path(e);
     if path == "." {
         e.inner().to_string()
     } else {
@@ -324,6 +348,27 @@ mod tests {
 
     fn toml(text: &str) -> Result<Outer, String> {
         deserialize(toml::de::Deserializer::parse(text).unwrap()).map_err(|e| e.to_string())
+    }
+
+    /// A syntax error where a key should be names the value it lies in, without the `?`
+    /// segment `serde_path_to_error` writes for the key it could not read.
+    #[test]
+    fn paths_leave_out_unnamed_segments() {
+        let text = r#"{"point": [0, 0, 0], "ranges": [{"min": 1, 7: 2}]}"#;
+        let e = deserialize::<_, Outer>(&mut serde_json::Deserializer::from_str(text)).unwrap_err();
+        assert_eq!(e.path().to_string(), "ranges[0].?");
+        assert_eq!(path(&e), "ranges[0]");
+        assert!(
+            message(&e).starts_with("ranges[0]: key must be a string"),
+            "{}",
+            message(&e)
+        );
+        let e =
+            deserialize::<_, Outer>(&mut serde_json::Deserializer::from_str("{7: 1}")).unwrap_err();
+        assert_eq!(path(&e), ".");
+        let text = r#"{"point": [0, 0, 0], "range": {"min": "x", "max": 1}}"#;
+        let e = deserialize::<_, Outer>(&mut serde_json::Deserializer::from_str(text)).unwrap_err();
+        assert_eq!(path(&e), "range.min");
     }
 
     #[test]

@@ -339,6 +339,35 @@ fn merge_refuses_numbers_out_of_range_naming_file_field_and_value() {
         assert!(!out.exists(), "{part}: nothing may be written");
         std::fs::write(run.join(file), original).unwrap();
     }
+    // An --out that is a file, not a folder, is named as such.
+    let file = dir.path().join("file");
+    std::fs::write(&file, "x").unwrap();
+    merge_refused(
+        &[&a, &b],
+        &file,
+        &["file: cannot write: exists and is not a folder"],
+    );
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "x");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_kinsynth"))
+        .args([
+            "experiment",
+            "paper-2d",
+            "--runs",
+            "1",
+            "--evaluations",
+            "10",
+            "--out",
+        ])
+        .arg(&file)
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(
+        e.contains("file: cannot write: exists and is not a folder"),
+        "{e}"
+    );
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "x");
     // Slices of different experiments: the setting and both values, no debug output.
     let m = a.join("experiment.json");
     let original = read(&m);

@@ -231,6 +231,7 @@ pub fn run_experiment(
     let methods = methods(preset);
     let mut records = Vec::new();
     let workspaces = shard.workspaces(spec.runs);
+    crate::io::check_output_dir(out)?;
     std::fs::create_dir_all(out).map_err(|source| crate::Error::Write {
         path: out.to_path_buf(),
         source,
@@ -461,6 +462,7 @@ pub fn merge(dirs: &[std::path::PathBuf], out: &Path) -> Result<Vec<RunRecord>> 
         .collect();
     let slices: Vec<(&Path, &str)> = slices.iter().map(|(d, w)| (*d, w.as_str())).collect();
     crate::io::check_dir_outside("--out", out, &slices)?;
+    crate::io::check_output_dir(out)?;
     let spec = manifests[0].spec.clone();
     let mut owner: Vec<Option<usize>> = vec![None; spec.runs];
     for (i, m) in manifests.iter().enumerate() {

@@ -433,7 +433,7 @@ fn from_value_at<T: serde::de::DeserializeOwned>(
     value: serde_json::Value,
 ) -> std::result::Result<T, String> {
     crate::strict::deserialize(value).map_err(|e| {
-        let path = e.path().to_string();
+        let path = crate::strict::path(&e);
         if path == "." {
             format!(": {}", e.inner())
         } else {

@@ -276,7 +276,8 @@ impl Scenario {
             parse_error(m.trim_end().to_string())
         };
         let de = toml::de::Deserializer::parse(text).map_err(|e| describe(None, &e))?;
-        crate::strict::deserialize(de).map_err(|e| describe(Some(e.path().to_string()), e.inner()))
+        crate::strict::deserialize(de)
+            .map_err(|e| describe(Some(crate::strict::path(&e)), e.inner()))
     }
 
     /// Validates a raw scenario and builds the design space and workspace; mesh files are
