@@ -312,6 +312,21 @@ fn huge_design_values_are_refused_naming_field_and_value() {
             design("0.3", "[-1, 1]", 10_000),
             vec!["links", "10000 links", "at most 64"],
         ),
+        // Inside a best.json, the field is named from the file's top, as a wrong type is.
+        (
+            format!(
+                r#"{{"cost": 1, "design": {}}}"#,
+                design("1e308", "[-1, 1]", 2)
+            ),
+            vec!["d.json: design.links[0].a = 1e308", "1000 m"],
+        ),
+        (
+            format!(
+                r#"{{"cost": 1, "design": {}}}"#,
+                design("\"x\"", "[-1, 1]", 2)
+            ),
+            vec!["d.json: design.links[0].a: invalid type"],
+        ),
     ] {
         let p = write(dir.path(), "d.json", &text);
         let mut all = vec![p.to_str().unwrap()];

@@ -336,7 +336,18 @@ impl Design {
             file: path.to_path_buf(),
             message: crate::strict::message(&e),
         })?;
-        design.validate().map_err(|e| e.in_file(path))?;
+        // A best.json's fields are named from the file's top, as its parse errors are.
+        design
+            .validate()
+            .map_err(|e| match e {
+                Error::InvalidValue {
+                    field,
+                    value,
+                    reason,
+                } if wrapped => Error::invalid(format!("design.{field}"), value, reason),
+                e => e,
+            })
+            .map_err(|e| e.in_file(path))?;
         Ok(design)
     }
 
