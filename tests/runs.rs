@@ -406,6 +406,14 @@ fn a_changed_checkpoint_is_refused() {
             ],
         );
     }
+    // A checksum that is no string.
+    let mut c = original.clone();
+    c["checksum"] = serde_json::json!(5);
+    write(ga, &c);
+    one_line_error(
+        &resume(ga, &[]),
+        &["checkpoint.json: checksum = 5: must be a string"],
+    );
     // Out of the domain: named by the value.
     let mut c = original.clone();
     c["state"]["population"][1]["x"][2] = serde_json::json!(-1e300);

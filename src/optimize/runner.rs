@@ -211,18 +211,10 @@ pub enum Integrity {
 }
 
 /// The hash [`Checkpoint::checksum`] records: [`fingerprint`] of the checkpoint's JSON value
-/// without its `checksum` key, written compactly with its keys sorted (as `serde_json` holds
-/// them), so that the file's own layout does not matter.
+/// without its `checksum` key (`value` must not hold it), written compactly with its keys
+/// sorted (as `serde_json` holds them), so that the file's own layout does not matter.
 pub fn content_hash(value: &serde_json::Value) -> String {
-    let text = match value {
-        serde_json::Value::Object(map) if map.contains_key("checksum") => {
-            let mut map = map.clone();
-            map.remove("checksum");
-            serde_json::Value::Object(map).to_string()
-        }
-        v => v.to_string(),
-    };
-    fingerprint(text.as_bytes())
+    fingerprint(value.to_string().as_bytes())
 }
 
 /// One free design variable as a checkpoint records it.
@@ -762,7 +754,8 @@ impl<'a> Runner<'a> {
             message: e.to_string(),
         };
         let mut v: serde_json::Value = serde_json::from_str(&text).map_err(parse)?;
-        // The content as written, before anything read is filled in.
+        // The content as written, without its checksum and before anything read is filled in.
+        let recorded = v.as_object_mut().and_then(|m| m.remove("checksum"));
         let now = content_hash(&v);
         if let Some(planner) = v.get_mut("planner") {
             clamping_unless_recorded(planner);
@@ -771,6 +764,18 @@ impl<'a> Runner<'a> {
             file: path.clone(),
             message: m.trim_start_matches(['.', ':', ' ']).to_string(),
         })?;
+        c.checksum = match recorded {
+            None => None,
+            Some(serde_json::Value::String(r)) => Some(r),
+            Some(other) => {
+                return Err(Error::invalid(
+                    "checksum",
+                    other,
+                    "must be a string, as the run writes it (fnv1a64:…)",
+                )
+                .in_file(&path))
+            }
+        };
         c.integrity = match &c.checksum {
             None => Integrity::Unsealed,
             Some(recorded) if *recorded == now => Integrity::Intact,
