@@ -534,7 +534,9 @@ pub fn merge(dirs: &[std::path::PathBuf], out: &Path) -> Result<Vec<RunRecord>> 
             // The checkpoint's history is checked as it is read, and its content against its
             // checksum.
             let checkpoint = Runner::read_checkpoint(&run_dir)?;
-            checkpoint.check_integrity(&run_dir.join(super::runner::files::CHECKPOINT))?;
+            checkpoint
+                .integrity
+                .check(&run_dir.join(super::runner::files::CHECKPOINT))?;
             let history = checkpoint.history;
             records.push(RunRecord {
                 workspace: w,

@@ -665,7 +665,9 @@ impl<'r, 'a> IslandJob<'r, 'a> {
                 evaluations,
             });
         }
-        setup.check_content()?;
+        if let Some(c) = resume {
+            c.integrity.check(&checkpoint_path)?;
+        }
         if rank == 0 {
             setup.warn();
         }

@@ -585,10 +585,6 @@ pub(crate) struct Setup {
     /// Warnings about the checkpoint resumed, printed once the whole checkpoint is known to
     /// be good (an error about it then stays alone on one line).
     pub warnings: Vec<String>,
-    /// The error of a resumed checkpoint whose content has changed since it was written
-    /// ([`Integrity::Changed`]), raised by [`Setup::check_content`] once the rest of the
-    /// checkpoint has been checked (a value out of its domain is named by itself first).
-    changed: Option<(PathBuf, String, String)>,
 }
 
 impl Setup {
@@ -598,33 +594,20 @@ impl Setup {
             eprintln!("warning: {w}");
         }
     }
-
-    /// Refuses a resumed checkpoint whose content has changed since the run wrote it.
-    pub(crate) fn check_content(&self) -> Result<()> {
-        match &self.changed {
-            None => Ok(()),
-            Some((path, recorded, now)) => Err(changed_error(path, recorded, now)),
-        }
-    }
 }
 
-/// The error about the checkpoint `path` whose content hashes to `now` where it records
-/// `recorded` ([`Integrity::Changed`]).
-pub(crate) fn changed_error(path: &Path, recorded: &str, now: &str) -> Error {
-    Error::invalid(
-        "checksum",
-        recorded,
-        format!("the content hashes to {now}: the checkpoint was changed after the run wrote it, and would resume to another result; use the checkpoint as written"),
-    )
-    .in_file(path)
-}
-
-impl Checkpoint {
+impl Integrity {
     /// Refuses a checkpoint (read from `path`) whose content has changed since it was
-    /// written; one that records no checksum passes.
-    pub fn check_integrity(&self, path: &Path) -> Result<()> {
-        match &self.integrity {
-            Integrity::Changed { recorded, now } => Err(changed_error(path, recorded, now)),
+    /// written; one that records no checksum passes. A resume asks once the rest of the
+    /// checkpoint has been checked, so that a value out of its domain is named by itself.
+    pub fn check(&self, path: &Path) -> Result<()> {
+        match self {
+            Integrity::Changed { recorded, now } => Err(Error::invalid(
+                "checksum",
+                recorded,
+                format!("the content hashes to {now}: the checkpoint was changed after the run wrote it, and would resume to another result; use the checkpoint as written"),
+            )
+            .in_file(path)),
             Integrity::Intact | Integrity::Unsealed => Ok(()),
         }
     }
@@ -834,7 +817,7 @@ impl<'a> Runner<'a> {
                 }
                 let optimizer = load_optimizer(o.algorithm, c.state, &self.scenario.space)
                     .map_err(|e| e.in_file(self.checkpoint_path()))?;
-                setup.check_content()?;
+                c.integrity.check(&self.checkpoint_path())?;
                 setup.warn();
                 (
                     optimizer,
@@ -1000,22 +983,18 @@ impl<'a> Runner<'a> {
                 })?;
         let hash = fingerprint(&scenario_bytes);
         let shape = ScenarioShape::of(self.scenario);
-        let (mut warnings, mut changed) = (Vec::new(), None);
+        let mut warnings = Vec::new();
         if let Some(c) = resume {
             warnings.extend(
                 self.check_binding(c, &hash, &shape)
                     .map_err(|e| e.in_file(&checkpoint_path))?,
             );
             check_planner(&self.planner).map_err(|e| e.in_file(&checkpoint_path))?;
-            match &c.integrity {
-                Integrity::Intact => {}
-                Integrity::Unsealed => warnings.push(format!(
+            if c.integrity == Integrity::Unsealed {
+                warnings.push(format!(
                     "{}: the checkpoint records no checksum (an older version wrote it); changes made to it since are not detected",
                     checkpoint_path.display()
-                )),
-                Integrity::Changed { recorded, now } => {
-                    changed = Some((checkpoint_path.clone(), recorded.clone(), now.clone()))
-                }
+                ));
             }
             if let Some(w) = self.schedule_moved(c) {
                 warnings.push(format!("{}: {w}", checkpoint_path.display()));
@@ -1034,7 +1013,6 @@ impl<'a> Runner<'a> {
             hash,
             shape,
             warnings,
-            changed,
         })
     }
 
