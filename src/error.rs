@@ -205,6 +205,27 @@ impl Error {
         }
     }
 
+    /// Prefixes the field path of an [`Error::InvalidValue`] or [`Error::Mesh`] with `prefix`
+    /// (`radius` under `obstacle[3]` → `obstacle[3].radius`); other errors pass unchanged.
+    pub fn under(self, prefix: &str) -> Self {
+        match self {
+            Error::InvalidValue {
+                field,
+                value,
+                reason,
+            } => Error::InvalidValue {
+                field: format!("{prefix}.{field}"),
+                value,
+                reason,
+            },
+            Error::Mesh { field, source } => Error::Mesh {
+                field: format!("{prefix}.{field}"),
+                source,
+            },
+            other => other,
+        }
+    }
+
     /// Attaches the file being processed, unless the error already names a file (a parse error
     /// with an empty file name gets this one).
     pub fn in_file(self, file: impl Into<PathBuf>) -> Self {

@@ -436,13 +436,32 @@ fn a_changed_checkpoint_is_refused() {
         &resume(pso, &[]),
         &["state.particles[0].v[1] = 0.2: beyond the largest velocity"],
     );
-    let mut c = json(&path(asa));
-    c["state"]["k"][4] = serde_json::json!(-3.0);
-    write(asa, &c);
-    one_line_error(
-        &resume(asa, &[]),
-        &["state.k[4] = -3: must not be negative"],
-    );
+    let original_asa = json(&path(asa));
+    for (field, index, value, says) in [
+        ("k", Some(4), -3.0, "state.k[4] = -3: must not be negative"),
+        (
+            "k_accept",
+            None,
+            -1.0,
+            "state.k_accept = -1: must not be negative",
+        ),
+        ("t0", Some(0), 0.0, "state.t0[0] = 0: must be positive"),
+        (
+            "t0_accept",
+            None,
+            -2.0,
+            "state.t0_accept = -2: must be positive",
+        ),
+    ] {
+        let mut c = original_asa.clone();
+        let at = &mut c["state"][field];
+        match index {
+            Some(i) => at[i] = serde_json::json!(value),
+            None => *at = serde_json::json!(value),
+        }
+        write(asa, &c);
+        one_line_error(&resume(asa, &[]), &[says]);
+    }
     // The same content, laid out another way: resumes, and to the result of the unchanged
     // checkpoint.
     let copy = dir.path().join("copy");

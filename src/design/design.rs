@@ -339,14 +339,7 @@ impl Design {
         // A best.json's fields are named from the file's top, as its parse errors are.
         design
             .validate()
-            .map_err(|e| match e {
-                Error::InvalidValue {
-                    field,
-                    value,
-                    reason,
-                } if wrapped => Error::invalid(format!("design.{field}"), value, reason),
-                e => e,
-            })
+            .map_err(|e| if wrapped { e.under("design") } else { e })
             .map_err(|e| e.in_file(path))?;
         Ok(design)
     }

@@ -321,25 +321,41 @@ impl Optimizer for Asa {
             }
         }
         // Annealing times count up from 0 and temperatures start positive.
-        let times = self
-            .k
-            .iter()
-            .enumerate()
-            .map(|(i, &v)| (format!("k[{i}]"), v));
-        let times = times.chain([("k_accept".to_string(), self.k_accept)]);
-        if let Some((name, v)) = times.clone().find(|(_, v)| v.is_nan() || *v < 0.0) {
-            return Err(format!("{name} = {}: must not be negative", Num(v)));
-        }
-        let temps = self
-            .t0
-            .iter()
-            .enumerate()
-            .map(|(i, &v)| (format!("t0[{i}]"), v));
-        let mut temps = temps.chain([("t0_accept".to_string(), self.t0_accept)]);
-        if let Some((name, v)) = temps.find(|(_, v)| v.is_nan() || *v <= 0.0) {
-            return Err(format!("{name} = {}: must be positive", Num(v)));
-        }
-        Ok(())
+        let time = |v: f64| v >= 0.0;
+        let temperature = |v: f64| v > 0.0;
+        check_all("k", &self.k, true, time, "must not be negative")?;
+        check_all(
+            "k_accept",
+            &[self.k_accept],
+            false,
+            time,
+            "must not be negative",
+        )?;
+        check_all("t0", &self.t0, true, temperature, "must be positive")?;
+        check_all(
+            "t0_accept",
+            &[self.t0_accept],
+            false,
+            temperature,
+            "must be positive",
+        )
+    }
+}
+
+/// Checks that every value of the state field `field` satisfies `ok` (a NaN never does); the
+/// error names the value (`k[3] = -1`, or `k_accept = -1` for a field of one number, given as
+/// a slice of one with `indexed` false).
+fn check_all(
+    field: &str,
+    values: &[f64],
+    indexed: bool,
+    ok: impl Fn(f64) -> bool,
+    why: &str,
+) -> Result<(), String> {
+    match values.iter().position(|&v| !ok(v)) {
+        None => Ok(()),
+        Some(i) if indexed => Err(format!("{field}[{i}] = {}: {why}", Num(values[i]))),
+        Some(i) => Err(format!("{field} = {}: {why}", Num(values[i]))),
     }
 }
 

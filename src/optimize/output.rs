@@ -310,14 +310,7 @@ impl RunSummary {
     /// links and joints kept that the design can have (six axes a link). Errors name the
     /// field (`design.links[2].a`, `cost`) and the value.
     pub fn check_figures(&self) -> crate::Result<()> {
-        self.design.validate().map_err(|e| match e {
-            crate::Error::InvalidValue {
-                field,
-                value,
-                reason,
-            } => crate::Error::invalid(format!("design.{field}"), value, reason),
-            e => e,
-        })?;
+        self.design.validate().map_err(|e| e.under("design"))?;
         check_reachability("reachability", self.reachability)?;
         check_cost("cost", self.cost)?;
         let links = self.design.links.len();

@@ -46,24 +46,9 @@ pub struct Scenario {
     pub optimizer: OptimizerConfig,
 }
 
-/// Prefixes the field path of an [`Error::InvalidValue`] (e.g. `radius` → `obstacle[3].radius`).
+/// Prefixes the field path of an error ([`Error::under`], e.g. `radius` → `obstacle[3].radius`).
 fn at(prefix: &str) -> impl Fn(Error) -> Error + '_ {
-    move |e| match e {
-        Error::InvalidValue {
-            field,
-            value,
-            reason,
-        } => Error::InvalidValue {
-            field: format!("{prefix}.{field}"),
-            value,
-            reason,
-        },
-        Error::Mesh { field, source } => Error::Mesh {
-            field: format!("{prefix}.{field}"),
-            source,
-        },
-        other => other,
-    }
+    move |e| e.under(prefix)
 }
 
 pub(crate) fn check(
