@@ -367,6 +367,50 @@ fn optimize_writes_a_report_that_renders_in_chromium() {
         .collect();
     assert!(close(&view["endEffector"], &ee, 1e-4), "{view}");
     screenshot(&page, "glovebox-optimize");
+    // The run's report plots its history; a page of its best.json (`view --design`), which
+    // holds none, shows the plot beside it, and without one says where the history is.
+    let rows = std::fs::read_to_string(out.join("history.csv"))
+        .unwrap()
+        .lines()
+        .count()
+        - 1;
+    assert_eq!(view["run"]["plotted"], true);
+    assert_eq!(
+        view["run"]["convergence"],
+        format!("{rows} rows of history.csv.")
+    );
+    let best_page = dir.path().join("best.html");
+    let best_file = out.join("best.json");
+    let view_best = || {
+        run(&[
+            "view".as_ref(),
+            file.as_os_str(),
+            "--design".as_ref(),
+            best_file.as_os_str(),
+            "-o".as_ref(),
+            best_page.as_os_str(),
+        ]);
+        selftest(&best_page)["view"]["run"].clone()
+    };
+    let shown = view_best();
+    assert_eq!(shown["plotted"], true, "{shown}");
+    assert!(
+        shown["convergence"]
+            .as_str()
+            .unwrap()
+            .contains("the convergence.svg beside the best.json"),
+        "{shown}"
+    );
+    std::fs::remove_file(out.join("convergence.svg")).unwrap();
+    let shown = view_best();
+    assert_eq!(shown["plotted"], false, "{shown}");
+    assert!(
+        shown["convergence"]
+            .as_str()
+            .unwrap()
+            .contains("A best.json holds no history"),
+        "{shown}"
+    );
 }
 
 /// A scene with a 100,000-triangle mesh: every triangle reaches the page and it renders.

@@ -31,7 +31,7 @@ pub struct Args {
     /// Optimiser. Default: the scenario's.
     #[arg(long, conflicts_with = "resume")]
     pub optimizer: Option<kinsynth::scenario::Algorithm>,
-    /// Edge checker. Default: the scenario's.
+    /// Edge checker: discrete, segment, ccd or certified. Default: the scenario's.
     #[arg(long, conflicts_with = "resume")]
     pub checker: Option<kinsynth::collision::CheckerKind>,
     /// Step bound L_max. Default: the scenario's.

@@ -81,6 +81,14 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         }
         Some(summary)
     });
+    // And its convergence plot is the convergence.svg beside it, when there is one (shown as
+    // an image, which runs no script).
+    let convergence = summary.as_ref().and(args.design.as_ref()).and_then(|p| {
+        let svg = p.with_file_name(kinsynth::optimize::runner::files::PLOT);
+        let text = kinsynth::limits::read_text(&svg, kinsynth::limits::MAX_TEXT_FILE_BYTES).ok()?;
+        let start = text.trim_start();
+        (start.starts_with("<svg") || start.starts_with("<?xml")).then_some(text)
+    });
     let report = match &args.reach {
         Some(p) => Some(load_reach(p, &s.workspace.tasks, chain.dof())?),
         None => None,
@@ -104,7 +112,7 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
         run: summary.as_ref().map(|summary| RunView {
             summary,
             history: &[],
-            convergence_svg: None,
+            convergence_svg: convergence.as_deref(),
         }),
     };
     write_report(&input, &args.output)?;

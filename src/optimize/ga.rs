@@ -16,7 +16,12 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct GaParams {
-    /// Individuals per generation. Default 32.
+    /// Individuals per generation. Default 32. A scenario sets it with `optimizer.population`:
+    /// its `[optimizer.ga]` leaves it out, which reads as 0 ([`FOLLOWS_POPULATION`]).
+    #[serde(
+        default = "follows_population",
+        skip_serializing_if = "is_following_population"
+    )]
     pub population: usize,
     /// Individuals carried unchanged into the next generation. Default 2.
     pub elites: usize,
@@ -35,6 +40,21 @@ pub struct GaParams {
     /// move that removes a link or a joint in one step. Default: 0.5 / dimension.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub zero_rate: Option<f64>,
+}
+
+/// The value of [`GaParams::population`] and [`crate::optimize::pso::PsoParams::swarm`] in a
+/// scenario's `[optimizer.ga]` and `[optimizer.pso]` that leave it out: the size is
+/// `optimizer.population`'s, which the scenario sets for every algorithm.
+pub const FOLLOWS_POPULATION: usize = 0;
+
+/// [`FOLLOWS_POPULATION`], for serde.
+pub(crate) fn follows_population() -> usize {
+    FOLLOWS_POPULATION
+}
+
+/// True for [`FOLLOWS_POPULATION`], which is not written.
+pub(crate) fn is_following_population(n: &usize) -> bool {
+    *n == FOLLOWS_POPULATION
 }
 
 impl Default for GaParams {

@@ -34,7 +34,13 @@ pub enum Learning {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PsoParams {
-    /// Particles. Default 32.
+    /// Particles. Default 32. A scenario sets it with `optimizer.population`: its
+    /// `[optimizer.pso]` leaves it out, which reads as 0
+    /// ([`crate::optimize::ga::FOLLOWS_POPULATION`]).
+    #[serde(
+        default = "crate::optimize::ga::follows_population",
+        skip_serializing_if = "crate::optimize::ga::is_following_population"
+    )]
     pub swarm: usize,
     /// Variant. Default `comprehensive`.
     pub learning: Learning,

@@ -94,9 +94,9 @@ pub struct OptimizerConfig {
     /// Migration between islands (`kinsynth optimize --islands`): every `interval`
     /// generations each island sends its best `count` designs to the next. Default 10 and 2.
     pub migration: Migration,
-    /// GA settings.
+    /// GA settings (its `population` is `population`'s).
     pub ga: GaParams,
-    /// PSO settings (`swarm` is taken from `population`).
+    /// PSO settings (its `swarm` is `population`'s).
     pub pso: PsoParams,
     /// ASA settings.
     pub asa: AsaParams,
@@ -114,8 +114,15 @@ impl Default for OptimizerConfig {
             recheck_seeds: 8,
             confirm_seeds: 3,
             migration: Migration::default(),
-            ga: GaParams::default(),
-            pso: PsoParams::default(),
+            // Their sizes are `population`'s (and so not written to a scenario).
+            ga: GaParams {
+                population: crate::optimize::ga::FOLLOWS_POPULATION,
+                ..GaParams::default()
+            },
+            pso: PsoParams {
+                swarm: crate::optimize::ga::FOLLOWS_POPULATION,
+                ..PsoParams::default()
+            },
             asa: AsaParams::default(),
         }
     }

@@ -367,6 +367,23 @@ impl Scenario {
             check(n > 0, "optimizer.evaluations", n, "must be at least 1")?;
         }
         check_non_negative(o.checkpoint_interval, "optimizer.checkpoint_interval")?;
+        // The GA's population and the swarm are `optimizer.population`; a size set in their
+        // own sections would be overridden without a word, so one that differs is refused.
+        let follows = crate::optimize::ga::FOLLOWS_POPULATION;
+        for (n, field) in [
+            (o.ga.population, "optimizer.ga.population"),
+            (o.pso.swarm, "optimizer.pso.swarm"),
+        ] {
+            check(
+                n == follows || n == o.population,
+                field,
+                n,
+                &format!(
+                    "the size of every algorithm's population is optimizer.population ({}): set it there",
+                    o.population
+                ),
+            )?;
+        }
         // The algorithms' and the migration's settings, by the rules a checkpoint's are held
         // to on resume.
         o.migration.check("optimizer.migration.", o.population)?;

@@ -280,6 +280,29 @@ mod tests {
     use super::*;
     use crate::scenario::Scenario;
 
+    /// The bundled paper scenarios are what the command in their header writes today, byte
+    /// for byte (and so every setting a generated scenario carries, and none that has no
+    /// effect: an algorithm's population size is `optimizer.population`'s only).
+    #[test]
+    fn bundled_paper_scenarios_are_what_their_command_writes() {
+        for (preset, file) in [
+            (Preset::Paper2d, "paper-2d.toml"),
+            (Preset::Paper3d, "paper-3d.toml"),
+        ] {
+            let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("examples/scenarios")
+                .join(file);
+            let bundled = std::fs::read_to_string(&path).unwrap();
+            let text = to_toml(preset, &generate(preset, 1));
+            assert!(
+                bundled == text,
+                "{file} differs from `kinsynth scenario --preset {} --seed 1`",
+                preset.name()
+            );
+            assert!(!text.contains("\nswarm =") && text.matches("\npopulation =").count() == 1);
+        }
+    }
+
     #[test]
     fn approach_cones_are_deterministic_and_keep_the_points() {
         for preset in [Preset::Paper2d, Preset::Paper3d] {
