@@ -414,6 +414,41 @@ fn a_changed_checkpoint_is_refused() {
         &resume(ga, &[]),
         &["checkpoint.json: checksum = 5: must be a string"],
     );
+    // An island job's checkpoint, which the command shares among the ranks before they read
+    // it, is held to its checksum as well (and warned of without one).
+    let islands = dir.path().join("islands");
+    ok(&optimize(
+        &paper_2d(),
+        &islands,
+        &[
+            "--islands",
+            "2",
+            "--evaluations",
+            "130",
+            "--recheck-seeds",
+            "1",
+        ],
+    )
+    .output()
+    .unwrap());
+    let island_original = json(&path(&islands));
+    let mut c = island_original.clone();
+    c["planner"]["goal_tolerance"] = serde_json::json!(0.03);
+    write(&islands, &c);
+    let o = resume(&islands, &["--islands", "2", "--evaluations", "300"]);
+    one_line_error(
+        &o,
+        &[
+            "checkpoint.json: checksum = fnv1a64:",
+            "was changed after the run wrote it",
+        ],
+    );
+    let mut c = island_original.clone();
+    c.as_object_mut().unwrap().remove("checksum");
+    write(&islands, &c);
+    let o = resume(&islands, &["--islands", "2", "--evaluations", "300"]);
+    ok(&o);
+    assert!(stderr(&o).contains("records no checksum"), "{}", stderr(&o));
     // Out of the domain: named by the value.
     let mut c = original.clone();
     c["state"]["population"][1]["x"][2] = serde_json::json!(-1e300);

@@ -224,16 +224,37 @@ pub fn share_job(
     comm: &dyn Comm,
     spec: Option<std::result::Result<JobSpec, String>>,
 ) -> std::result::Result<JobSpec, JobError> {
-    let message = match (&spec, comm.rank() == 0) {
-        (Some(s), true) => encode(s),
+    /// The job as sent. What reading the checkpoint found of its checksum
+    /// ([`Checkpoint::integrity`]) is no part of the checkpoint's serialised form, so it
+    /// travels beside it: every rank (rank 0 as well, which takes the job from the broadcast)
+    /// refuses a changed checkpoint, and warns of an unsealed one, as a single run does.
+    #[derive(Serialize, Deserialize)]
+    struct Wire {
+        job: std::result::Result<JobSpec, String>,
+        integrity: super::runner::Integrity,
+    }
+    let message = match (spec, comm.rank() == 0) {
+        (Some(job), true) => {
+            let integrity = job
+                .as_ref()
+                .ok()
+                .and_then(|j| j.checkpoint.as_ref())
+                .map(|c| c.integrity.clone())
+                .unwrap_or_default();
+            encode(&Wire { job, integrity })
+        }
         _ => Vec::new(),
     };
     let bytes = comm.broadcast(&message)?;
-    let got: std::result::Result<JobSpec, String> = decode(comm, "job", &bytes)?;
-    got.map_err(|message| JobError {
+    let Wire { job, integrity } = decode(comm, "job", &bytes)?;
+    let mut job = job.map_err(|message| JobError {
         error: Error::Island { rank: 0, message },
         on_every_rank: true,
-    })
+    })?;
+    if let Some(c) = &mut job.checkpoint {
+        c.integrity = integrity;
+    }
+    Ok(job)
 }
 
 /// Figures of an island job that the results do not hold: where its time went.

@@ -192,7 +192,7 @@ pub struct Checkpoint {
 }
 
 /// What a checkpoint's [`Checkpoint::checksum`] says of the content read.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub enum Integrity {
     /// The content hashes to the recorded checksum (or the checkpoint was not read from a
     /// file).
