@@ -16,11 +16,9 @@ fn scenario(dir: &Path) -> PathBuf {
         Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scenarios/paper-3d.toml"),
     )
     .unwrap();
-    assert!(text.contains("\n[optimizer]\n"));
-    let text = text.replace(
-        "\n[optimizer]\n",
-        "\n[optimizer]\nmigration = { interval = 2, count = 2 }\n",
-    );
+    let default = "\n[optimizer.migration]\ninterval = 10\ncount = 2\n";
+    assert!(text.contains(default));
+    let text = text.replace(default, "\n[optimizer.migration]\ninterval = 2\ncount = 2\n");
     let path = dir.join("paper-3d-islands.toml");
     std::fs::write(&path, text).unwrap();
     path
