@@ -18,7 +18,10 @@ fn scenario(dir: &Path) -> PathBuf {
     .unwrap();
     let default = "\n[optimizer.migration]\ninterval = 10\ncount = 2\n";
     assert!(text.contains(default));
-    let text = text.replace(default, "\n[optimizer.migration]\ninterval = 2\ncount = 2\n");
+    let text = text.replace(
+        default,
+        "\n[optimizer.migration]\ninterval = 2\ncount = 2\n",
+    );
     let path = dir.join("paper-3d-islands.toml");
     std::fs::write(&path, text).unwrap();
     path

@@ -406,6 +406,68 @@ fn a_changed_checkpoint_is_refused() {
             ],
         );
     }
+    // The checkpoint's record of its scenario edited: named as a changed checkpoint, not as a
+    // changed scenario (the scenario file is untouched).
+    let mut c = original.clone();
+    c["scenario_hash"] = serde_json::json!("fnv1a64:0000000000000000");
+    write(ga, &c);
+    one_line_error(
+        &resume(ga, &[]),
+        &[
+            "checkpoint.json: checksum = fnv1a64:",
+            "was changed after the run wrote it",
+        ],
+    );
+    // Sealed anew after the edit (as by hand): counters that contradict each other are still
+    // refused, each named.
+    let reseal = |mut c: serde_json::Value| {
+        c.as_object_mut().unwrap().remove("checksum");
+        let sum = kinsynth::optimize::runner::fingerprint(c.to_string().as_bytes());
+        c["checksum"] = serde_json::json!(sum);
+        c
+    };
+    // Unchanged but for the seal: resumes.
+    write(ga, &reseal(original.clone()));
+    ok(&resume(ga, &[]));
+    let generation = original["generation"].as_u64().unwrap();
+    let made = original["evaluations"].as_u64().unwrap();
+    for (edit, says) in [
+        (
+            ("stale", serde_json::json!(1000000)),
+            format!("stale = 1000000: more generations without improvement than generations made ({generation})"),
+        ),
+        (
+            ("generation", serde_json::json!(u64::MAX)),
+            format!("generation = 18446744073709551615: more than the evaluations made ({made})"),
+        ),
+        (
+            ("evaluations", serde_json::json!(1)),
+            "the evaluations made (1)".to_string(),
+        ),
+    ] {
+        let mut c = original.clone();
+        c[edit.0] = edit.1;
+        write(ga, &reseal(c));
+        one_line_error(&resume(ga, &[]), &["checkpoint.json: ", &says]);
+    }
+    let mut c = original.clone();
+    c["history"][0]["evaluations"] = serde_json::json!(made + 1);
+    write(ga, &reseal(c));
+    one_line_error(
+        &resume(ga, &[]),
+        &[&format!(
+            "history[0].evaluations = {}: must lie between the row before's (0) and the evaluations made ({made})",
+            made + 1
+        )],
+    );
+    // A budget below the evaluations already made.
+    write(ga, &original);
+    one_line_error(
+        &resume(ga, &["--evaluations", "20"]),
+        &[&format!(
+            "--evaluations = 20: the checkpoint has made {made} evaluations already"
+        )],
+    );
     // A checksum that is no string.
     let mut c = original.clone();
     c["checksum"] = serde_json::json!(5);

@@ -596,6 +596,51 @@ impl Setup {
     }
 }
 
+impl Checkpoint {
+    /// Checks that the counters agree with each other, as a run writes them: a generation
+    /// makes at least one evaluation, the generations without improvement are some of the
+    /// generations made, and the history's evaluations rise to at most those made. A
+    /// checkpoint whose checksum was made anew after an edit is caught here where the edit
+    /// breaks them (`stale = 1000000` would end the run as converged).
+    pub(crate) fn check_counters(&self) -> Result<()> {
+        if self.generation > self.evaluations {
+            return Err(Error::invalid(
+                "generation",
+                self.generation,
+                format!(
+                    "more than the evaluations made ({}): a generation makes at least one",
+                    self.evaluations
+                ),
+            ));
+        }
+        if self.stale as u64 > self.generation {
+            return Err(Error::invalid(
+                "stale",
+                self.stale,
+                format!(
+                    "more generations without improvement than generations made ({})",
+                    self.generation
+                ),
+            ));
+        }
+        let mut before = 0;
+        for (i, row) in self.history.iter().enumerate() {
+            if row.evaluations < before || row.evaluations > self.evaluations {
+                return Err(Error::invalid(
+                    format!("history[{i}].evaluations"),
+                    row.evaluations,
+                    format!(
+                        "must lie between the row before's ({before}) and the evaluations made ({})",
+                        self.evaluations
+                    ),
+                ));
+            }
+            before = row.evaluations;
+        }
+        Ok(())
+    }
+}
+
 impl Integrity {
     /// Refuses a checkpoint (read from `path`) whose content has changed since it was
     /// written; one that records no checksum passes. A resume asks once the rest of the
@@ -773,6 +818,11 @@ impl<'a> Runner<'a> {
         check_seconds("elapsed_s", c.elapsed_s).map_err(|e| e.in_file(&path))?;
         // The history is carried into the run's plots and averaged by `merge`.
         super::output::check_history(&c.history).map_err(|e| e.in_file(&path))?;
+        // Counters that disagree in a changed checkpoint: the change is named.
+        if let Err(e) = c.check_counters() {
+            c.integrity.check(&path)?;
+            return Err(e.in_file(&path));
+        }
         Ok(c)
     }
 
@@ -985,10 +1035,25 @@ impl<'a> Runner<'a> {
         let shape = ScenarioShape::of(self.scenario);
         let mut warnings = Vec::new();
         if let Some(c) = resume {
-            warnings.extend(
-                self.check_binding(c, &hash, &shape)
-                    .map_err(|e| e.in_file(&checkpoint_path))?,
-            );
+            // A changed checkpoint that no longer binds (its recorded scenario hash or shape
+            // edited) is named as changed, not as a changed scenario.
+            let binding = self
+                .check_binding(c, &hash, &shape)
+                .map_err(|e| e.in_file(&checkpoint_path));
+            if binding.is_err() {
+                c.integrity.check(&checkpoint_path)?;
+            }
+            warnings.extend(binding?);
+            if let Some(budget) = self.options.evaluations.filter(|&b| b < c.evaluations) {
+                return Err(Error::invalid(
+                    "--evaluations",
+                    budget,
+                    format!(
+                        "the checkpoint has made {} evaluations already: a resumed run goes on from there (give at least that many, or start a new run)",
+                        c.evaluations
+                    ),
+                ));
+            }
             check_planner(&self.planner).map_err(|e| e.in_file(&checkpoint_path))?;
             if c.integrity == Integrity::Unsealed {
                 warnings.push(format!(
