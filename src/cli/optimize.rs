@@ -312,13 +312,15 @@ pub fn prepare(args: &Args) -> Result<Prepared, kinsynth::Error> {
     kinsynth::io::check_output_dir(&out)?;
     let (lock, acquired) = OutputLock::acquire(&out)?;
     if let Some(o) = &acquired.took_over {
-        eprintln!(
-            "warning: {}: taking over the lock of pid {} on host {} ({}), which is no longer running",
+        // The lock file's fields as they are, on one line and of a readable length.
+        let message = format!(
+            "{}: taking over the lock of pid {} on host {} ({}), which is no longer running",
             lock.path().display(),
             o.pid,
             o.host,
             o.command
         );
+        eprintln!("warning: {}", kinsynth::error::shorten(&message));
     }
     if !acquired.removed.is_empty() {
         eprintln!(

@@ -16,6 +16,10 @@ use std::path::{Path, PathBuf};
 /// Name of the lock file in the output directory.
 pub const LOCK_FILE: &str = ".kinsynth.lock";
 
+/// Most bytes of a lock file read for its owner (a run writes about 200): a longer one names
+/// no owner.
+const MAX_LOCK_BYTES: u64 = 64 * 1024;
+
 /// Who holds a lock: written into the lock file.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Owner {
@@ -42,11 +46,14 @@ impl Owner {
         }
     }
 
+    /// The owner for a message, on one line and of a readable length whatever the lock file
+    /// holds (its host and command are shown escaped and shortened, as values in errors are).
     fn describe(&self) -> String {
-        format!(
+        crate::error::shorten(&format!(
             "pid {} on host {} ({}), since {} (Unix time)",
             self.pid, self.host, self.command, self.since
-        )
+        ))
+        .into_owned()
     }
 }
 
@@ -122,17 +129,33 @@ impl OutputLock {
             path: path.clone(),
             source,
         };
+        // A run writes its lock as a regular file: anything else there (a FIFO, which would
+        // block the read; a link to /dev/zero, which would never end) is refused, not read.
+        if let Ok(m) = std::fs::symlink_metadata(&path) {
+            if !m.file_type().is_file() {
+                return Err(lock_error(
+                    dir,
+                    format!(
+                        "{} is not a regular file, as a run's lock is: remove it",
+                        path.display()
+                    ),
+                ));
+            }
+        }
         let (mut file, previous) = loop {
-            let mut file = std::fs::OpenOptions::new()
-                .read(true)
-                .write(true)
-                .create(true)
-                .truncate(false)
-                .open(&path)
-                .map_err(write_err)?;
+            let mut options = std::fs::OpenOptions::new();
+            options.read(true).write(true).create(true).truncate(false);
+            #[cfg(unix)]
+            {
+                // Nor through a link or a FIFO put there since the check above.
+                use std::os::unix::fs::OpenOptionsExt;
+                options.custom_flags(libc::O_NOFOLLOW | libc::O_NONBLOCK);
+            }
+            let file = options.open(&path).map_err(write_err)?;
             let mut text = String::new();
-            // A lock file that cannot be read as text is treated as empty (no owner known).
-            let _ = file.read_to_string(&mut text);
+            // A lock file that cannot be read as text, or is longer than an owner's record,
+            // is treated as empty (no owner known).
+            let _ = (&file).take(MAX_LOCK_BYTES).read_to_string(&mut text);
             let previous: Option<Owner> = serde_json::from_str(&text).ok();
             if !try_lock(&file).map_err(write_err)? {
                 let who = previous.map_or_else(
@@ -290,5 +313,46 @@ mod tests {
         assert_eq!(got.took_over, Some(dead));
         assert_eq!(got.removed.len(), 2, "{:?}", got.removed);
         assert!(dir.path().join("keep.tmp").exists());
+    }
+
+    /// What is not a run's lock file is refused without being read: a FIFO (whose read would
+    /// block) and a link to /dev/zero (whose read would never end); a huge lock file is read
+    /// only as far as an owner's record goes (its owner is then unknown); and an owner with a
+    /// line break and a long command is described on one line of a readable length.
+    #[cfg(unix)]
+    #[test]
+    fn what_is_not_a_lock_file_is_refused_unread_and_owners_are_shown_on_one_line() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join(LOCK_FILE);
+        let name = std::ffi::CString::new(path.as_os_str().as_encoded_bytes()).unwrap();
+        assert_eq!(unsafe { libc::mkfifo(name.as_ptr(), 0o600) }, 0);
+        let e = OutputLock::acquire(dir.path()).unwrap_err().to_string();
+        assert!(
+            e.contains("is not a regular file, as a run's lock is: remove it"),
+            "{e}"
+        );
+        std::fs::remove_file(&path).unwrap();
+        std::os::unix::fs::symlink("/dev/zero", &path).unwrap();
+        let e = OutputLock::acquire(dir.path()).unwrap_err().to_string();
+        assert!(e.contains("is not a regular file"), "{e}");
+        std::fs::remove_file(&path).unwrap();
+        // 1 GiB of zeros, sparse: read only as far as the limit, no owner known.
+        std::fs::File::create(&path)
+            .unwrap()
+            .set_len(1 << 30)
+            .unwrap();
+        let (lock, got) = OutputLock::acquire(dir.path()).unwrap();
+        assert_eq!(got.took_over, None);
+        drop(lock);
+        let forged = Owner {
+            pid: 1,
+            host: "vm\nerror: forged line".into(),
+            command: "x".repeat(20_000),
+            since: 1,
+        };
+        let shown = forged.describe();
+        assert_eq!(shown.lines().count(), 1, "{shown}");
+        assert!(shown.contains("vm\\nerror: forged line"), "{shown}");
+        assert!(shown.len() < 400, "{} bytes", shown.len());
     }
 }
