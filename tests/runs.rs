@@ -1115,3 +1115,51 @@ fn output_names_taken_by_the_wrong_kind_fail_the_run_before_it_starts() {
         );
     }
 }
+
+/// The scenario's mesh files are bound to the checkpoint as its file is: a mesh changed
+/// between a run and its resume (the scenario file untouched) is refused, naming the scenario
+/// and the mesh hashes, and the mesh restored resumes.
+#[test]
+fn a_mesh_changed_since_the_checkpoint_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(paper_2d()).unwrap();
+    let tet = |z: f64| {
+        format!(
+            "v 5 5 {z}\nv 6 5 {z}\nv 5 6 {z}\nv 5 5 {}\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n",
+            z + 1.0
+        )
+    };
+    let obj = dir.path().join("tet.obj");
+    std::fs::write(&obj, tet(0.0)).unwrap();
+    let scenario = dir.path().join("meshed.toml");
+    std::fs::write(
+        &scenario,
+        format!("{text}\n[[obstacle]]\nshape = \"mesh\"\nfile = \"tet.obj\"\nposition = [0.0, 0.0, 0.0]\n"),
+    )
+    .unwrap();
+    let out = dir.path().join("run");
+    ok(&optimize(
+        &scenario,
+        &out,
+        &["--evaluations", "40", "--recheck-seeds", "1"],
+    )
+    .output()
+    .unwrap());
+    let c = json(&out.join("checkpoint.json"));
+    assert!(
+        c["meshes_hash"]
+            .as_str()
+            .is_some_and(|h| h.starts_with("fnv1a64:")),
+        "{c}"
+    );
+    std::fs::write(&obj, tet(0.5)).unwrap();
+    one_line_error(
+        &resume(&out, &["--evaluations", "60"]),
+        &[
+            "meshed.toml: its mesh files have changed since the checkpoint: their contents hash fnv1a64:",
+            "--resume needs the meshes the run started with",
+        ],
+    );
+    std::fs::write(&obj, tet(0.0)).unwrap();
+    ok(&resume(&out, &["--evaluations", "60"]));
+}

@@ -178,6 +178,11 @@ pub struct Checkpoint {
     /// The scenario's shape when the run started: links, free variables, obstacles, tasks.
     #[serde(default)]
     pub scenario_shape: Option<ScenarioShape>,
+    /// Hash of the contents of the scenario's mesh files when the run started
+    /// ([`meshes_fingerprint`]); absent for a scenario without meshes (and in checkpoints of
+    /// older versions, which bound the scenario file only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub meshes_hash: Option<String>,
     /// An island job's islands (then `state` is the array of their states, island by island).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub islands: Option<super::islands::IslandsCheckpoint>,
@@ -307,6 +312,30 @@ impl ScenarioShape {
         count("the number of obstacles", self.obstacles, now.obstacles)
             .or_else(|| count("the number of tasks", self.tasks, now.tasks))
     }
+}
+
+/// The fingerprint of the contents of a scenario's mesh files, each once, in the order of the
+/// obstacles that first use them (`None` for a scenario without meshes): a checkpoint records
+/// it, so that a mesh changed between a run and its resume is found, as a changed scenario
+/// file is.
+pub fn meshes_fingerprint(s: &Scenario) -> Result<Option<String>> {
+    let mut seen: std::collections::HashSet<&Path> = std::collections::HashSet::new();
+    let mut each = String::new();
+    for o in &s.workspace.obstacles {
+        if let crate::world::ObstacleShape::Mesh { file, .. } = &o.geometry {
+            if !seen.insert(file.as_path()) {
+                continue;
+            }
+            let bytes = crate::limits::read_file(file, crate::limits::MAX_MESH_FILE_BYTES)
+                .map_err(|source| Error::Read {
+                    path: file.clone(),
+                    source,
+                })?;
+            each.push_str(&fingerprint(&bytes));
+            each.push('\n');
+        }
+    }
+    Ok((!seen.is_empty()).then(|| fingerprint(each.as_bytes())))
 }
 
 /// A stable fingerprint of a file's contents: 64-bit FNV-1a, as `fnv1a64:` and 16 hex digits.
@@ -582,6 +611,8 @@ pub(crate) struct Setup {
     pub hash: String,
     /// The scenario's shape.
     pub shape: ScenarioShape,
+    /// The fingerprint of its mesh files' contents ([`meshes_fingerprint`]).
+    pub meshes_hash: Option<String>,
     /// Warnings about the checkpoint resumed, printed once the whole checkpoint is known to
     /// be good (an error about it then stays alone on one line).
     pub warnings: Vec<String>,
@@ -1033,12 +1064,14 @@ impl<'a> Runner<'a> {
                 })?;
         let hash = fingerprint(&scenario_bytes);
         let shape = ScenarioShape::of(self.scenario);
+        let meshes_hash = meshes_fingerprint(self.scenario)?;
         let mut warnings = Vec::new();
         if let Some(c) = resume {
             // A changed checkpoint that no longer binds (its recorded scenario hash or shape
             // edited) is named as changed, not as a changed scenario.
             let binding = self
                 .check_binding(c, &hash, &shape)
+                .and_then(|w| self.check_meshes(c, meshes_hash.as_deref()).map(|()| w))
                 .map_err(|e| e.in_file(&checkpoint_path));
             if binding.is_err() {
                 c.integrity.check(&checkpoint_path)?;
@@ -1077,6 +1110,7 @@ impl<'a> Runner<'a> {
             objective,
             hash,
             shape,
+            meshes_hash,
             warnings,
         })
     }
@@ -1229,6 +1263,23 @@ impl<'a> Runner<'a> {
         ))
     }
 
+    /// Refuses a checkpoint whose scenario's mesh files have changed since it was written (an
+    /// STL moved or rescaled gives another cell, with the same scenario file). A checkpoint
+    /// that records no mesh hash (no meshes, or an older version) is not checked.
+    fn check_meshes(&self, c: &Checkpoint, now: Option<&str>) -> Result<()> {
+        match (&c.meshes_hash, now) {
+            (Some(was), now) if Some(was.as_str()) != now => Err(Error::invalid(
+                "scenario",
+                self.scenario_path.display(),
+                format!(
+                    "its mesh files have changed since the checkpoint: their contents hash {}, the checkpoint's {was}; --resume needs the meshes the run started with",
+                    now.unwrap_or("nothing (no meshes)")
+                ),
+            )),
+            _ => Ok(()),
+        }
+    }
+
     /// Refuses a checkpoint that does not belong to the scenario: another file, or the same
     /// file edited since the run started. The error says what changed. A checkpoint that
     /// records no hash gives a warning instead.
@@ -1340,6 +1391,7 @@ impl<'a> Runner<'a> {
             state,
             scenario_hash: Some(setup.hash.clone()),
             scenario_shape: Some(setup.shape.clone()),
+            meshes_hash: setup.meshes_hash.clone(),
             islands,
             checksum: None,
             integrity: Integrity::Intact,
@@ -1667,6 +1719,7 @@ mod tests {
             state: serde_json::Value::Null,
             scenario_hash: None,
             scenario_shape: None,
+            meshes_hash: None,
             islands: None,
             checksum: None,
             integrity: Integrity::Intact,
