@@ -275,7 +275,29 @@ fn merge_refuses_numbers_out_of_range_naming_file_field_and_value() {
         text
     };
     type Edit = fn(&mut serde_json::Value);
-    let cases: [(&str, Edit, &str); 11] = [
+    let cases: [(&str, Edit, &str); 15] = [
+        // Within its range, but not the design's.
+        (
+            "best.json",
+            |v| v["links_kept"] = 0.into(),
+            "best.json: links_kept = 0: the design keeps",
+        ),
+        // Another method's or workspace's results in this run's place.
+        (
+            "best.json",
+            |v| v["optimizer"] = "asa".into(),
+            "best.json: optimizer = asa: workspace 0, method 0",
+        ),
+        (
+            "best.json",
+            |v| v["checker"] = "discrete".into(),
+            "best.json: checker = discrete: workspace 0, method 0",
+        ),
+        (
+            "best.json",
+            |v| v["seed"] = 12345.into(),
+            "best.json: seed = 12345: workspace 0, method 0",
+        ),
         (
             "best.json",
             |v| v["reachability"] = 1e308.into(),
@@ -339,6 +361,26 @@ fn merge_refuses_numbers_out_of_range_naming_file_field_and_value() {
         assert!(!out.exists(), "{part}: nothing may be written");
         std::fs::write(run.join(file), original).unwrap();
     }
+    // A checkpoint without a checksum (an older version's) is merged, with the warning a
+    // resume gives.
+    let original = edit("checkpoint.json", &|v| {
+        v.as_object_mut().unwrap().remove("checksum");
+    });
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_kinsynth"))
+        .arg("merge")
+        .args([&a, &b])
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("checkpoint.json: the checkpoint records no checksum"),
+        "{stderr}"
+    );
+    std::fs::write(run.join("checkpoint.json"), original).unwrap();
+    std::fs::remove_dir_all(&out).unwrap();
     // An --out that is a file, not a folder, is named as such.
     let file = dir.path().join("file");
     std::fs::write(&file, "x").unwrap();

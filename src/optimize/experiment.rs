@@ -522,6 +522,40 @@ pub fn merge(dirs: &[std::path::PathBuf], out: &Path) -> Result<Vec<RunRecord>> 
                         message: e.to_string(),
                     })?;
             summary.check_figures().map_err(|e| e.in_file(&best))?;
+            // The run of this workspace and method: a best.json of another method or
+            // workspace put in its place would fill the row with another run's figures.
+            let m = &methods[k];
+            let algorithm = match m.algorithm {
+                Algorithm::Ga => "ga",
+                Algorithm::Pso => "pso",
+                Algorithm::Asa => "asa",
+            };
+            let ws_seed = spec.seed.saturating_add(w as u64);
+            for (field, value, expected) in [
+                (
+                    "optimizer",
+                    summary.optimizer.clone(),
+                    algorithm.to_string(),
+                ),
+                (
+                    "checker",
+                    summary.checker.clone(),
+                    m.checker.name().to_string(),
+                ),
+                ("seed", summary.seed.to_string(), ws_seed.to_string()),
+            ] {
+                if value != expected {
+                    return Err(crate::Error::invalid(
+                        field,
+                        value,
+                        format!(
+                            "workspace {w}, method {k} ({}) of the experiment has {expected}: the folder holds another run's results",
+                            m.label
+                        ),
+                    )
+                    .in_file(&best));
+                }
+            }
             if let Some(n) = spec.evaluations.filter(|&n| summary.evaluations > n) {
                 return Err(crate::Error::invalid(
                     "evaluations",
@@ -534,9 +568,14 @@ pub fn merge(dirs: &[std::path::PathBuf], out: &Path) -> Result<Vec<RunRecord>> 
             // The checkpoint's history is checked as it is read, and its content against its
             // checksum.
             let checkpoint = Runner::read_checkpoint(&run_dir)?;
-            checkpoint
-                .integrity
-                .check(&run_dir.join(super::runner::files::CHECKPOINT))?;
+            let checkpoint_path = run_dir.join(super::runner::files::CHECKPOINT);
+            checkpoint.integrity.check(&checkpoint_path)?;
+            if checkpoint.integrity == super::runner::Integrity::Unsealed {
+                eprintln!(
+                    "warning: {}: the checkpoint records no checksum (an older version wrote it); changes made to its history since are not detected",
+                    checkpoint_path.display()
+                );
+            }
             let history = checkpoint.history;
             records.push(RunRecord {
                 workspace: w,

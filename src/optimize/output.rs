@@ -307,7 +307,7 @@ pub fn check_history(history: &[HistoryRow]) -> crate::Result<()> {
 
 impl RunSummary {
     /// Checks the figures of a `best.json`: its design, `R` in [0, 1], a finite cost ≥ 0, and
-    /// links and joints kept that the design can have (six axes a link). Errors name the
+    /// links and joints kept that the design can have (six axes a link) and has. Errors name the
     /// field (`design.links[2].a`, `cost`) and the value.
     pub fn check_figures(&self) -> crate::Result<()> {
         self.design.validate().map_err(|e| e.under("design"))?;
@@ -317,6 +317,29 @@ impl RunSummary {
         let what = format!("{links} links");
         check_kept("links_kept", self.links_kept, links, &what)?;
         check_kept("joints_kept", self.joints_kept, 6 * links, &what)?;
+        // And they are the design's own.
+        for (field, value, kept, what) in [
+            (
+                "links_kept",
+                self.links_kept,
+                self.design.links_kept(),
+                "links",
+            ),
+            (
+                "joints_kept",
+                self.joints_kept,
+                self.design.joints_kept(),
+                "joints",
+            ),
+        ] {
+            if value != kept {
+                return Err(crate::Error::invalid(
+                    field,
+                    value,
+                    format!("the design keeps {kept} {what}"),
+                ));
+            }
+        }
         Ok(())
     }
 }
