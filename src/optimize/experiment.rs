@@ -507,7 +507,7 @@ pub fn merge(dirs: &[std::path::PathBuf], out: &Path) -> Result<Vec<RunRecord>> 
     let mut records = Vec::with_capacity(spec.runs * methods.len());
     for (w, o) in owner.iter().enumerate() {
         let dir = dirs[o.expect("checked above")].join(format!("workspace{w}"));
-        for k in 0..methods.len() {
+        for (k, m) in methods.iter().enumerate() {
             let run_dir = dir.join(format!("method{k}"));
             let best = run_dir.join(super::runner::files::BEST);
             let text = crate::limits::read_text(&best, crate::limits::MAX_TEXT_FILE_BYTES)
@@ -524,7 +524,6 @@ pub fn merge(dirs: &[std::path::PathBuf], out: &Path) -> Result<Vec<RunRecord>> 
             summary.check_figures().map_err(|e| e.in_file(&best))?;
             // The run of this workspace and method: a best.json of another method or
             // workspace put in its place would fill the row with another run's figures.
-            let m = &methods[k];
             let algorithm = match m.algorithm {
                 Algorithm::Ga => "ga",
                 Algorithm::Pso => "pso",
