@@ -1007,11 +1007,31 @@ fn best_json_replays_its_evaluation_and_records_the_recheck() {
         "{}",
         stdout(&o)
     );
+    assert!(!stderr(&o).contains("warning"), "{}", stderr(&o));
     let (a, b) = (json(&replay), json(&out.join("reach.json")));
     assert_eq!(a["reachability"], best["reachability"]);
     assert_eq!(a["stream"], best["stream"]);
     assert_eq!(a["targets"], b["targets"]);
     assert_eq!(a["nodes"], b["nodes"]);
+    // A best.json whose recorded R its replay does not give is not as the run wrote it.
+    let mut edited = best.clone();
+    edited["reachability"] = serde_json::json!(0.25);
+    let file = dir.path().join("edited.json");
+    std::fs::write(&file, edited.to_string()).unwrap();
+    let o = Command::new(BIN)
+        .arg("reach")
+        .arg(paper_2d())
+        .arg("--design")
+        .arg(&file)
+        .output()
+        .unwrap();
+    ok(&o);
+    assert!(
+        stderr(&o)
+            .contains("edited.json: records R = 0.25, and this replay of its evaluation gives"),
+        "{}",
+        stderr(&o)
+    );
 }
 
 #[test]
@@ -1162,4 +1182,14 @@ fn a_mesh_changed_since_the_checkpoint_is_refused() {
     );
     std::fs::write(&obj, tet(0.0)).unwrap();
     ok(&resume(&out, &["--evaluations", "60"]));
+}
+
+/// `--resume` of a folder without a checkpoint (a run killed before its first) says so.
+#[test]
+fn resuming_a_folder_without_a_checkpoint_says_why() {
+    let dir = tempfile::tempdir().unwrap();
+    one_line_error(
+        &resume(dir.path(), &[]),
+        &["holds no checkpoint.json: the run there was stopped before its first checkpoint"],
+    );
 }

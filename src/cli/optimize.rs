@@ -192,6 +192,19 @@ pub fn prepare(args: &Args) -> Result<Prepared, kinsynth::Error> {
             ))
         }
     };
+    // A run's folder without a checkpoint: the run was stopped before it wrote its first.
+    if let Some(dir) = resume.as_ref().filter(|d| d.is_dir()) {
+        let file = kinsynth::optimize::runner::files::CHECKPOINT;
+        if std::fs::symlink_metadata(dir.join(file)).is_err() {
+            return Err(kinsynth::Error::invalid(
+                "--resume",
+                dir.display(),
+                format!(
+                    "holds no {file}: the run there was stopped before its first checkpoint (or it is no run's folder); start it anew without --resume"
+                ),
+            ));
+        }
+    }
     let checkpoint = match &resume {
         Some(dir) => Some(Runner::read_checkpoint(dir)?),
         None => None,

@@ -248,6 +248,23 @@ pub fn run(args: Args) -> Result<(), kinsynth::Error> {
     if let Some(why) = &report.home_blocked {
         say!("  {why}");
     }
+    // A replay gives the R the best.json records, unless the file was changed since the run
+    // wrote it (its design, say) or the planner is overridden.
+    if let (Some(r), Some(p), None, None) = (
+        replay.as_ref().and_then(|r| r.recorded),
+        &design,
+        checker,
+        lmax,
+    ) {
+        if (r - report.reachability).abs() > 1e-9 {
+            eprintln!(
+                "warning: {}: records R = {}, and this replay of its evaluation gives {:.3}: the file is not as the run wrote it",
+                p.display(),
+                kinsynth::error::Num(r),
+                report.reachability
+            );
+        }
+    }
     for t in &report.targets {
         let angle = match (t.orientation_error, t.approach_error) {
             (Some(e), _) => format!("  orientation {:.2}°", e.to_degrees()),

@@ -369,6 +369,9 @@ pub struct Replay {
     pub stream: u64,
     /// Planner settings of that run.
     pub planner: crate::planning::PlannerConfig,
+    /// The `R` the file records for that run, which the replay gives again (when the file is
+    /// as the run wrote it).
+    pub recorded: Option<f64>,
 }
 
 impl Replay {
@@ -406,6 +409,7 @@ impl Replay {
             seed: serde_json::from_value(seed.clone()).map_err(|e| parse("seed", e))?,
             stream: serde_json::from_value(stream.clone()).map_err(|e| parse("stream", e))?,
             planner,
+            recorded: v.get("reachability").and_then(serde_json::Value::as_f64),
         }))
     }
 }
