@@ -569,11 +569,8 @@ pub fn merge(dirs: &[std::path::PathBuf], out: &Path) -> Result<Vec<RunRecord>> 
             let checkpoint = Runner::read_checkpoint(&run_dir)?;
             let checkpoint_path = run_dir.join(super::runner::files::CHECKPOINT);
             checkpoint.integrity.check(&checkpoint_path)?;
-            if checkpoint.integrity == super::runner::Integrity::Unsealed {
-                eprintln!(
-                    "warning: {}: the checkpoint records no checksum (an older version wrote it); changes made to its history since are not detected",
-                    checkpoint_path.display()
-                );
+            if let Some(w) = checkpoint.integrity.warning(&checkpoint_path) {
+                eprintln!("warning: {w}");
             }
             let history = checkpoint.history;
             records.push(RunRecord {

@@ -691,6 +691,17 @@ impl Integrity {
             Integrity::Intact | Integrity::Unsealed => Ok(()),
         }
     }
+
+    /// The warning for a checkpoint (read from `path`) that records no checksum, which a
+    /// resume and `merge` print.
+    pub fn warning(&self, path: &Path) -> Option<String> {
+        (*self == Integrity::Unsealed).then(|| {
+            format!(
+                "{}: the checkpoint records no checksum (an older version wrote it); changes made to it since are not detected",
+                path.display()
+            )
+        })
+    }
 }
 
 /// The end of a run, as [`Runner::conclude`] takes it.
@@ -1092,12 +1103,7 @@ impl<'a> Runner<'a> {
                 ));
             }
             check_planner(&self.planner).map_err(|e| e.in_file(&checkpoint_path))?;
-            if c.integrity == Integrity::Unsealed {
-                warnings.push(format!(
-                    "{}: the checkpoint records no checksum (an older version wrote it); changes made to it since are not detected",
-                    checkpoint_path.display()
-                ));
-            }
+            warnings.extend(c.integrity.warning(&checkpoint_path));
             if let Some(w) = self.schedule_moved(c) {
                 warnings.push(format!("{}: {w}", checkpoint_path.display()));
             }
