@@ -12,7 +12,8 @@
 //! checker and prints the time and forward-kinematics evaluations per edge; the scenario
 //! defaults to the generated paper-3d preset of seed 11 (the one of `benches/edge_check.rs`).
 //! `reach` runs the reachability of the largest design with planner seeds 0–9 in turn, `REPS`
-//! runs (default 100) per checker at π/4, and prints the mean time per run; the scenario
+//! runs (default 100) per checker at π/4, and prints the mean time per run and the median over
+//! the seeds of each seed's mean time (the "median" figure); the scenario
 //! defaults to the bundled paper-3d. Set `CHECKER=segment` or `CHECKER=certified` to run only
 //! one, `AIMED_STEERING=on` to plan with `planner.aimed_steering`, and `IK_CLAMP=on` to plan
 //! without `planner.ik_hold_limits` (the paper's clamped inverse-kinematics steps), and
@@ -113,7 +114,10 @@ fn main() {
                 }
                 let start = Instant::now();
                 let mut reached = 0.0;
+                // Seconds and runs per planner seed, for the median over the seeds.
+                let mut per_seed = [(0.0, 0usize); 10];
                 for i in 0..reps {
+                    let t = Instant::now();
                     let r = reachability(
                         &chain,
                         &scene,
@@ -122,11 +126,26 @@ fn main() {
                         i as u64 % 10,
                         0,
                     );
+                    let seed = &mut per_seed[i % 10];
+                    seed.0 += t.elapsed().as_secs_f64();
+                    seed.1 += 1;
                     reached += r.reachability;
                 }
                 let n = reps.max(1) as f64;
+                let mut means: Vec<f64> = per_seed
+                    .iter()
+                    .filter(|s| s.1 > 0)
+                    .map(|s| s.0 / s.1 as f64 * 1e3)
+                    .collect();
+                means.sort_by(f64::total_cmp);
+                let m = means.len();
+                let median = match m {
+                    0 => f64::NAN,
+                    _ if m % 2 == 1 => means[m / 2],
+                    _ => 0.5 * (means[m / 2 - 1] + means[m / 2]),
+                };
                 println!(
-                    "{:>10}: {:.3} ms per reachability run, mean R {:.3}",
+                    "{:>10}: {:.3} ms per reachability run (median over the planner seeds {median:.3} ms), mean R {:.3}",
                     kind.name(),
                     start.elapsed().as_secs_f64() / n * 1e3,
                     reached / n
