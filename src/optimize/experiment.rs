@@ -524,17 +524,12 @@ pub fn merge(dirs: &[std::path::PathBuf], out: &Path) -> Result<Vec<RunRecord>> 
             summary.check_figures().map_err(|e| e.in_file(&best))?;
             // The run of this workspace and method: a best.json of another method or
             // workspace put in its place would fill the row with another run's figures.
-            let algorithm = match m.algorithm {
-                Algorithm::Ga => "ga",
-                Algorithm::Pso => "pso",
-                Algorithm::Asa => "asa",
-            };
             let ws_seed = spec.seed.saturating_add(w as u64);
             for (field, value, expected) in [
                 (
                     "optimizer",
                     summary.optimizer.clone(),
-                    algorithm.to_string(),
+                    m.algorithm.name().to_string(),
                 ),
                 (
                     "checker",

@@ -65,6 +65,17 @@ pub enum Algorithm {
     Asa,
 }
 
+impl Algorithm {
+    /// Its name, as scenarios, the command line and `best.json` write it (`ga`, `pso`, `asa`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Algorithm::Ga => "ga",
+            Algorithm::Pso => "pso",
+            Algorithm::Asa => "asa",
+        }
+    }
+}
+
 /// The `[optimizer]` section.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -124,6 +135,19 @@ impl Default for OptimizerConfig {
                 ..PsoParams::default()
             },
             asa: AsaParams::default(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An algorithm's name is the one scenarios write (and so `best.json`'s `optimizer`).
+    #[test]
+    fn algorithm_names_are_their_serialised_names() {
+        for a in [Algorithm::Ga, Algorithm::Pso, Algorithm::Asa] {
+            assert_eq!(serde_json::to_value(a).unwrap(), a.name());
         }
     }
 }
